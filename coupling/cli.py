@@ -1,0 +1,95 @@
+"""The ``femdem`` command line (contract in shared/design/ARCHITECTURE.md).
+
+Exit codes: 0 ok; 2 bad input (one line: key, value, what is allowed); 3 run stopped on a
+detected instability.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+from .case import ENGINES, MODES, bundled_cases, load_case
+from .params import CaseError, parse_set
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # argparse's own errors are bad input too: one line, exit 2
+        print(f"femdem: {message}", file=sys.stderr)
+        raise SystemExit(2)
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="femdem", description="FEM far field + DEM damage zone co-simulation")
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    d = sub.add_parser("doctor", help="engines, versions, MPI stacks, what is missing")
+    d.add_argument("--json", action="store_true")
+    sub.add_parser("cases", help="list bundled cases")
+    r = sub.add_parser("run", help="run a case")
+    r.add_argument("case", help="bundled case name or path to a .toml case file")
+    r.add_argument("--dem", default="yade", help=f"DEM engine: {', '.join(ENGINES)}")
+    r.add_argument("--mode", default=None, help=f"{', '.join(MODES)} (default: the case's first mode)")
+    r.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a parameter by its dotted key (as echoed in summary.json)")
+    r.add_argument("--out", default=None, help="run directory (default runs/<case>-<mode>-<time>)")
+    r.add_argument("--quiet", action="store_true", help="no progress bar")
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = _parser().parse_args(argv)
+    try:
+        if args.command == "doctor":
+            from .doctor import doctor
+            return doctor(as_json=args.json)
+        if args.command == "cases":
+            return _cases()
+        if args.command == "run":
+            return _run(args)
+    except CaseError as exc:
+        print(f"femdem: {exc}", file=sys.stderr)
+        return 2
+    return 0
+
+
+def _cases() -> int:
+    for name, path in bundled_cases().items():
+        try:
+            case = load_case(str(path))
+            print(f"{name:24s} {'/'.join(case.scene.MODES):18s} {case.description}")
+        except CaseError as exc:
+            print(f"{name:24s} (invalid: {exc})")
+    return 0
+
+
+def _run(args) -> int:
+    from .run import execute
+    if args.dem not in ENGINES:
+        raise CaseError(f"--dem {args.dem}: allowed {', '.join(ENGINES)}")
+    case = load_case(args.case, parse_set(args.set))
+    mode = args.mode or case.scene.MODES[0]
+    if mode not in MODES:
+        raise CaseError(f"--mode {mode}: allowed {', '.join(MODES)}")
+    code, out, summary = execute(case, mode, args.dem, args.out, args.quiet)
+    if not args.quiet or code:
+        _report(summary, out)
+    return code
+
+
+def _report(s: dict, out) -> None:
+    print(f"{s['case']} ({s['mode']}{', ' + s['dem_backend'] if s['dem_backend'] else ''}): "
+          f"{s['status']} in {s['timing_s']['total']:.2f} s, {s['clock']['steps']} steps")
+    if s["message"]:
+        print(f"  {s['message']}")
+    for name, c in s["checks"].items():
+        err = f"rel_err {c['rel_err']:.2e}" if c["rel_err"] is not None else f"limit {c['tol']:g}"
+        print(f"  check {name}: {c['value']:.6g} vs {c['reference']:.6g} ({err}, "
+              f"{'PASS' if c['passed'] else 'FAIL'}; {c['source']})")
+    print(f"  results: {out}/summary.json")
+    plots = sorted((out / "plots").glob("*.png"))
+    if plots:
+        print(f"  plot:    {plots[0]}")
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,80 @@
+"""The run directory of the output contract (ARCHITECTURE.md).
+
+Everything is written into ``<DIR>.partial/`` and the directory is renamed to ``<DIR>`` only
+when the run has finished (ok, unstable or error), so a killed run never leaves a
+half-written result where a finished one is expected.
+"""
+from __future__ import annotations
+
+import json
+import os
+import shutil
+from contextlib import contextmanager
+from pathlib import Path
+
+import h5py
+import meshio
+import numpy as np
+
+from .simulation import FieldFrame
+
+
+@contextmanager
+def _cwd(path: Path):
+    # meshio's TimeSeriesWriter puts its .h5 next to the current directory, not the .xdmf
+    old = os.getcwd()
+    os.chdir(path)
+    try:
+        yield
+    finally:
+        os.chdir(old)
+
+
+class RunOutput:
+    """Writer for one run directory: fields over time, then history, summary and plots."""
+
+    def __init__(self, final_dir: Path):
+        self.final = Path(final_dir)
+        if self.final.exists() and any(self.final.iterdir()):
+            raise FileExistsError(str(self.final))
+        self.dir = self.final.with_name(self.final.name + ".partial")
+        if self.dir.exists():
+            shutil.rmtree(self.dir)
+        (self.dir / "plots").mkdir(parents=True)
+        self._xdmf = None
+
+    def frame(self, t: float, f: FieldFrame) -> None:
+        """Append one XDMF frame (the mesh is written with the first frame)."""
+        with _cwd(self.dir):
+            if self._xdmf is None:
+                self._xdmf = meshio.xdmf.TimeSeriesWriter("fields.xdmf").__enter__()
+                self._xdmf.write_points_cells(f.points, f.cells)
+            self._xdmf.write_data(t, point_data=f.point_data)
+
+    def finish(self, summary: dict, history: dict[str, np.ndarray]) -> Path:
+        """Write history.h5 and summary.json, close the fields, publish the directory."""
+        if self._xdmf is not None:
+            with _cwd(self.dir):
+                self._xdmf.__exit__()
+        with h5py.File(self.dir / "history.h5", "w") as h5:
+            g = h5.create_group("history")
+            for k, v in history.items():
+                g.create_dataset(k, data=np.asarray(v, dtype=float))
+            g.attrs["units"] = "SI"
+        tmp = self.dir / "summary.json.tmp"
+        tmp.write_text(json.dumps(summary, indent=2, default=_jsonable) + "\n")
+        os.replace(tmp, self.dir / "summary.json")
+        if self.final.exists():
+            self.final.rmdir()  # empty (checked in __init__)
+        os.replace(self.dir, self.final)
+        return self.final
+
+
+def _jsonable(x):
+    if isinstance(x, (np.floating, np.integer)):
+        return x.item()
+    if isinstance(x, np.bool_):
+        return bool(x)
+    if isinstance(x, np.ndarray):
+        return x.tolist()
+    raise TypeError(f"not JSON serialisable: {type(x)}")

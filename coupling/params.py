@@ -1,0 +1,135 @@
+"""Typed, range-checked case parameters addressed by flat dotted keys.
+
+A scene declares its parameters once, as ``{"material.E": Param(...)}``; the same dotted
+keys are read from the case file's TOML tables, accepted by ``--set key=value`` and echoed
+under ``"parameters"`` in summary.json. Every value is SI.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+
+class CaseError(ValueError):
+    """Bad input: one line naming the key, the value and what is allowed (exit code 2)."""
+
+
+@dataclass(frozen=True)
+class Param:
+    """One case parameter.
+
+    kind: "float" | "int" | "str" | "bool"; low/high: inclusive bounds unless
+    ``open_low``/``open_high``; choices: the allowed strings; unit: SI unit for messages.
+    """
+
+    default: Any
+    doc: str = ""
+    kind: str = "float"
+    unit: str = ""
+    low: float | None = None
+    high: float | None = None
+    open_low: bool = False
+    open_high: bool = False
+    choices: tuple[str, ...] | None = None
+
+    def allowed(self) -> str:
+        if self.choices is not None:
+            return "one of " + ", ".join(repr(c) for c in self.choices)
+        if self.kind == "bool":
+            return "true or false"
+        parts = []
+        if self.low is not None:
+            parts.append(f"{'>' if self.open_low else '>='} {self.low:g}")
+        if self.high is not None:
+            parts.append(f"{'<' if self.open_high else '<='} {self.high:g}")
+        what = {"float": "a number", "int": "an integer", "str": "a string"}[self.kind]
+        return what + (" " + " and ".join(parts) if parts else "") + (f" [{self.unit}]" if self.unit else "")
+
+    def coerce(self, key: str, value: Any) -> Any:
+        """Return the value in this parameter's type, or raise CaseError."""
+        bad = CaseError(f"{key} = {value!r}: expected {self.allowed()}")
+        if isinstance(value, str) and self.kind != "str":
+            value = _parse_scalar(value)
+        if self.kind == "bool":
+            if not isinstance(value, bool):
+                raise bad
+            return value
+        if self.kind == "str":
+            if not isinstance(value, str) or (self.choices and value not in self.choices):
+                raise bad
+            return value
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise bad
+        if self.kind == "int":
+            if isinstance(value, float) and not value.is_integer():
+                raise bad
+            value = int(value)
+        else:
+            value = float(value)
+            if not math.isfinite(value):
+                raise bad
+        if self.low is not None and (value < self.low or (self.open_low and value == self.low)):
+            raise bad
+        if self.high is not None and (value > self.high or (self.open_high and value == self.high)):
+            raise bad
+        return value
+
+
+def _parse_scalar(text: str) -> Any:
+    low = text.strip().lower()
+    if low in ("true", "false"):
+        return low == "true"
+    try:
+        return int(low)
+    except ValueError:
+        pass
+    try:
+        return float(low)
+    except ValueError:
+        return text
+
+
+def positive(default: float, doc: str, unit: str) -> Param:
+    """A strictly positive real number."""
+    return Param(default, doc, "float", unit, low=0.0, open_low=True)
+
+
+def flatten(table: dict, prefix: str = "") -> dict[str, Any]:
+    """Nested TOML tables -> {"a.b.c": value}."""
+    flat = {}
+    for k, v in table.items():
+        key = f"{prefix}{k}"
+        if isinstance(v, dict):
+            flat.update(flatten(v, key + "."))
+        else:
+            flat[key] = v
+    return flat
+
+
+def resolve(schema: dict[str, Param], given: dict[str, Any], where: str) -> dict[str, Any]:
+    """Defaults overlaid with ``given`` (flat dotted keys), every value checked.
+
+    where: what supplied ``given`` ("case file x.toml", "--set"), for the error line.
+    """
+    unknown = sorted(set(given) - set(schema))
+    if unknown:
+        key = unknown[0]
+        near = [k for k in schema if k.split(".")[-1] == key.split(".")[-1] or k.startswith(key.split(".")[0] + ".")]
+        hint = f"; known keys here: {', '.join(sorted(near)[:8])}" if near else ""
+        raise CaseError(f"{key}: unknown key in {where}{hint}")
+    out = {k: p.default for k, p in schema.items()}
+    for k, v in given.items():
+        out[k] = schema[k].coerce(k, v)
+    return out
+
+
+def parse_set(items: list[str]) -> dict[str, Any]:
+    """``["a.b=1", ...]`` -> {"a.b": "1"} (types are coerced against the schema later)."""
+    out = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip():
+            raise CaseError(f"--set {item!r}: expected key=value with a dotted key, e.g. material.E=7e10")
+        out[key.strip()] = value.strip()
+    return out

@@ -1,0 +1,98 @@
+"""``femdem run``: case -> Simulation -> clock loop -> run directory."""
+from __future__ import annotations
+
+import datetime as dt
+import platform
+import sys
+import time
+from pathlib import Path
+
+from .case import Case
+from .output import RunOutput
+from .params import CaseError
+from .simulation import Instability, run_clock
+
+
+def default_out(case: Case, mode: str) -> Path:
+    stamp = dt.datetime.now().strftime("%Y%m%d-%H%M%S")
+    return Path("runs") / f"{case.name}-{mode}-{stamp}"
+
+
+def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool) -> tuple[int, Path, dict]:
+    """Run one case; returns (exit code, run directory, summary)."""
+    scene = case.scene
+    if mode not in scene.MODES:
+        raise CaseError(f"--mode {mode}: case {case.name} supports {', '.join(scene.MODES)}")
+    out = Path(out) if out else default_out(case, mode)
+    try:
+        writer = RunOutput(out)
+    except FileExistsError:
+        raise CaseError(f"--out {out}: directory exists and is not empty; allowed: a new or empty directory") from None
+    t_start = time.perf_counter()
+    sim = None
+    try:
+        sim = scene.build(case.parameters, mode, dem)
+        status, message, result = "ok", "", None
+        bar = _progress(sim, quiet)
+        try:
+            result = run_clock(sim, on_sample=bar.update if bar else None, on_frame=writer.frame)
+        except Instability as exc:
+            status, message, result = "unstable", str(exc), exc.partial
+        finally:
+            if bar:
+                bar.close()
+        qoi, checks = {}, {}
+        if status == "ok":
+            qoi, checks = scene.evaluate(case.parameters, result["history"])
+            t0 = time.perf_counter()
+            scene.plot(case.parameters, result["history"], qoi, writer.dir / "plots")
+            result["timing_s"]["io"] += time.perf_counter() - t0
+    except CaseError:
+        writer_cleanup(writer)
+        raise
+    finally:
+        if sim is not None:
+            sim.close()
+    timing = dict(result["timing_s"], total=time.perf_counter() - t_start)
+    summary = {
+        "case": case.name, "case_file": str(case.path), "scene": scene.NAME, "mode": mode,
+        "dem_backend": dem if mode != "fem" else None,
+        "versions": {"python": platform.python_version(), **_versions(), **sim.versions},
+        "parameters": case.parameters, "counts": sim.counts,
+        "clock": {**sim.clock_info, "steps": result["steps"], "t_end": result["steps"] * sim.dt},
+        "timing_s": timing, "energy": result["energy"], "qoi": qoi, "checks": checks,
+        "status": status, "message": message,
+    }
+    final = writer.finish(summary, result["history"])
+    code = 0 if status == "ok" else 3
+    return code, final, summary
+
+
+def writer_cleanup(writer: RunOutput) -> None:
+    import shutil
+    shutil.rmtree(writer.dir, ignore_errors=True)
+
+
+def _progress(sim, quiet: bool):
+    if quiet or not sys.stderr.isatty():
+        return None
+    from tqdm import tqdm
+    bar = tqdm(total=sim.n_steps, unit="step", dynamic_ncols=True, leave=False)
+    last = [0]
+
+    class _Bar:
+        def update(self, step, t):
+            bar.update(step - last[0])
+            last[0] = step
+
+        def close(self):
+            bar.close()
+
+    return _Bar()
+
+
+def _versions() -> dict:
+    import numpy
+    import scipy
+    import skfem
+    return {"numpy": numpy.__version__, "scipy": scipy.__version__, "scikit-fem": skfem.__version__}

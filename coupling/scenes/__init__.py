@@ -1,0 +1,18 @@
+"""Scenes: builders that turn resolved case parameters into a Simulation.
+
+A scene module declares NAME, DESCRIPTION, MODES (the modes it supports), PARAMETERS
+(dotted key -> Param) and three functions:
+
+- ``build(p, mode, dem) -> Simulation``: participants, interface and clock stages;
+- ``evaluate(p, history) -> (qoi, checks)``: quantities of interest, and checks against
+  closed forms computed from ``p`` ({value, reference, rel_err, tol, passed, source});
+- ``plot(p, history, qoi, plots_dir)``: the case's figures.
+"""
+from __future__ import annotations
+
+from types import ModuleType
+
+from . import bar_wave
+
+Scene = ModuleType
+SCENES: dict[str, Scene] = {m.NAME: m for m in (bar_wave,)}

@@ -1,0 +1,77 @@
+"""Pieces every scene shares: FEM options, the time step rule, the FEM-only clock stages."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from fem_region.explicit import ExplicitDynamics
+from fem_region import mesh
+from fem_region.elements import ELEMENTS
+from fem_region.region import FORMULATIONS, INTEGRATIONS, FemRegion
+
+from ..params import CaseError, Param
+from ..simulation import FieldFrame, Simulation, Stage
+
+FEM_OPTIONS: dict[str, Param] = {
+    "mesh.element": Param("quad4", "2D element", kind="str", choices=("quad4", "tri3")),
+    "fem.integration": Param("selective", "full, or selective (shear at the centroid: no shear locking)",
+                             kind="str", choices=INTEGRATIONS),
+    "fem.formulation": Param("linear", "small-strain linear or Total Lagrangian", kind="str", choices=FORMULATIONS),
+    "fem.hypothesis": Param("plane_stress", "2D hypothesis", kind="str", choices=("plane_stress", "plane_strain")),
+}
+
+
+def make_region(m, p: dict, D: np.ndarray, rho, thickness: float) -> FemRegion:
+    """FemRegion on mesh m with the case's fem.* options; D (nel, ns, ns) or (ns, ns) Pa."""
+    try:
+        return FemRegion(m, ELEMENTS[mesh.element_name(m)], D, rho, thickness,
+                         p["fem.integration"], p["fem.formulation"])
+    except ValueError as exc:
+        raise CaseError(f"fem.integration = {p['fem.integration']!r}: {exc}") from None
+
+
+def time_step(p: dict, dt_stable: float) -> float:
+    """clock.dt if given (refused above the stable step), else clock.safety x stable step (s)."""
+    if p["clock.dt"] > dt_stable:
+        raise CaseError(f"clock.dt = {p['clock.dt']:g}: above the stable step; allowed <= {dt_stable:.4g} s")
+    return p["clock.dt"] or p["clock.safety"] * dt_stable
+
+
+def n_steps(p: dict, t_end_default: float, dt: float) -> tuple[int, float]:
+    """(steps, dt) such that steps * dt = t_end exactly, dt not above the given dt."""
+    t_end = p["clock.t_end"] or t_end_default
+    n = max(1, math.ceil(t_end / dt - 1e-9))
+    return n, t_end / n
+
+
+def fem_fields(dyn: ExplicitDynamics):
+    """XDMF frame of the FEM mesh with displacement and velocity."""
+    mesh = dyn.region.mesh
+    cell_type = {"quad4": "quad", "tri3": "triangle", "hex8": "hexahedron", "tet4": "tetra"}[dyn.region.etype.name]
+    pts = np.zeros((dyn.region.n_nodes, 3))
+    pts[:, : dyn.region.dim] = dyn.region.X
+
+    def frame() -> FieldFrame:
+        pad = lambda a: np.pad(a, ((0, 0), (0, 3 - a.shape[1])))
+        return FieldFrame(pts, {cell_type: mesh.t.T}, {"displacement": pad(dyn.state.u), "velocity": pad(dyn.state.v)})
+
+    return frame
+
+
+def fem_only(dyn: ExplicitDynamics, p: dict, t_end_default: float, probes: dict, **kw) -> Simulation:
+    """A Simulation that steps one explicit FEM participant alone."""
+    dt_stable = dyn.critical_dt()
+    n, dt = n_steps(p, t_end_default, time_step(p, dt_stable))
+    dyn.start()
+    every = p["output.history_every"] or max(1, n // 1000)
+    return Simulation(
+        stages=[Stage("fem.kick_drift", "fem", lambda: dyn.kick_drift(dt)),
+                Stage("fem.forces", "fem", dyn.compute_forces),
+                Stage("fem.kick", "fem", lambda: dyn.kick(dt))],
+        dt=dt, n_steps=n, history_every=every, probes=probes, energies=dyn.energies,
+        counts={"fem_nodes": dyn.region.n_nodes, "fem_elements": dyn.region.n_elements,
+                "particles": 0, "bonds": 0, "interface_particles": 0},
+        clock_info={"dt_fem": dt, "dt_dem": 0.0, "dt_stable_fem": dt_stable, "substeps": 0},
+        fields=fem_fields(dyn), field_frames=p["output.field_frames"],
+        energy_growth_tol=p["guards.energy_growth"], **kw)

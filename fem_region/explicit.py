@@ -1,0 +1,202 @@
+"""Central-difference (velocity-Verlet form) integration of a FemRegion with lumped mass.
+
+One step is split into the phases the coupled clock orders (ARCHITECTURE.md):
+``kick_drift`` (v_{n+1/2} = v_n + dt/2 a_n, prescribed velocities, u_{n+1} = u_n + dt v_{n+1/2}),
+``compute_forces`` (internal, external, damping and any coupling force at t_{n+1}) and
+``kick`` (v_{n+1} = v_{n+1/2} + dt/2 a_{n+1}). Alone they are the standard explicit scheme;
+with a DEM zone the interface stages sit between them.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from .region import FemRegion
+
+TimeFunction = Callable[[float], float]
+
+
+@dataclass
+class PrescribedMotion:
+    """Velocity v(t) (m/s) on flat DOFs ``dofs``; v(t) = 0 is a fixed / symmetry support."""
+
+    dofs: np.ndarray
+    velocity: TimeFunction = staticmethod(lambda t: 0.0)
+
+
+@dataclass
+class NodalLoad:
+    """Force ``amplitude * curve(t)`` (N) on flat DOFs ``dofs``; amplitude: scalar or (len(dofs),)."""
+
+    dofs: np.ndarray
+    amplitude: np.ndarray | float
+    curve: TimeFunction = staticmethod(lambda t: 1.0)
+
+
+@dataclass
+class FemState:
+    """u, v, a, f_ext: (n_nodes, dim) in m, m/s, m/s^2, N; t in s. A checkpoint is a copy."""
+
+    u: np.ndarray
+    v: np.ndarray
+    a: np.ndarray
+    f_ext: np.ndarray
+    t: float = 0.0
+    step: int = 0
+
+    def copy(self) -> "FemState":
+        return FemState(self.u.copy(), self.v.copy(), self.a.copy(), self.f_ext.copy(), self.t, self.step)
+
+
+@dataclass
+class EnergyLedger:
+    """Energy accounts (J), accumulated by the trapezoidal rule over each step's displacement."""
+
+    kinetic: float = 0.0
+    internal: float = 0.0
+    external_work: float = 0.0
+    support_work: float = 0.0
+    coupling_work: float = 0.0
+    damping: float = 0.0
+
+
+@dataclass
+class ExplicitDynamics:
+    """An explicit FEM participant: region + supports + loads + damping + state.
+
+    alpha, beta: Rayleigh damping C = alpha M + beta K (1/s, s); kinetic_damping: dynamic
+    relaxation by zeroing all velocities at each kinetic-energy peak (quasi-static runs).
+    extra_mass: (n_nodes,) kg added at nodes (e.g. interface particle masses shared to nodes).
+    """
+
+    region: FemRegion
+    supports: list[PrescribedMotion] = field(default_factory=list)
+    loads: list[NodalLoad] = field(default_factory=list)
+    alpha: float = 0.0
+    beta: float = 0.0
+    kinetic_damping: bool = False
+    extra_mass: np.ndarray | None = None
+
+    def __post_init__(self):
+        r = self.region
+        self.m = r.mass + (0.0 if self.extra_mass is None else self.extra_mass)
+        zero = np.zeros((r.n_nodes, r.dim))
+        self.state = FemState(zero.copy(), zero.copy(), zero.copy(), zero.copy())
+        self.f_coupling = zero.copy()  # written by the interface stage before compute_forces
+        self.ledger = EnergyLedger()
+        self._prescribed = np.unique(np.concatenate([s.dofs for s in self.supports])) if self.supports else np.zeros(0, int)
+        self._f_coupling_prev = zero.copy()
+        self._reaction_prev = np.zeros(self._prescribed.size)
+        self._ke_prev = 0.0
+
+    def set_initial_velocity(self, v: np.ndarray) -> None:
+        """v: (n_nodes, dim) m/s at t = 0."""
+        self.state.v[:] = v
+        self.ledger.kinetic = self.kinetic_energy()
+
+    def critical_dt(self) -> float:
+        """Stable step (s) including the stiffness-proportional damping reduction."""
+        dt = self.region.critical_dt()
+        if self.beta > 0:
+            w = 2.0 / dt
+            xi = 0.5 * self.beta * w
+            dt = 2.0 / w * (np.sqrt(1 + xi * xi) - xi)
+        return dt
+
+    def external_force(self, t: float) -> np.ndarray:
+        f = np.zeros(self.region.ndof)
+        for load in self.loads:
+            np.add.at(f, load.dofs, np.asarray(load.amplitude) * load.curve(t))
+        return f.reshape(-1, self.region.dim)
+
+    # -- the phases of one step ----------------------------------------------------------------
+    def kick_drift(self, dt: float) -> None:
+        s = self.state
+        s.v += 0.5 * dt * s.a
+        vflat = s.v.reshape(-1)
+        t_half = s.t + 0.5 * dt
+        for sup in self.supports:
+            vflat[sup.dofs] = sup.velocity(t_half)
+        self._du = dt * s.v
+        self._dt = dt
+        s.u += self._du
+        s.t += dt
+        s.step += 1
+
+    def compute_forces(self) -> None:
+        """Forces at the new configuration; a = f / m except on prescribed DOFs."""
+        s, L = self.state, self.ledger
+        f_ext = self.external_force(s.t)
+        f_int = self.region.internal_force(s.u)
+        f_damp = self._damping_force(s.v)
+        du = self._du
+        L.external_work += 0.5 * float(np.vdot(s.f_ext + f_ext, du))
+        L.damping += float(np.vdot(f_damp, du))
+        f = f_ext - f_int - f_damp + self.f_coupling
+        a = f / self.m[:, None]
+        if self._prescribed.size:
+            # the support supplies what the prescribed path needs beyond the residual force
+            a_pres = self._prescribed_acceleration()
+            reaction = self.m.repeat(self.region.dim)[self._prescribed] * a_pres - f.reshape(-1)[self._prescribed]
+            L.support_work += 0.5 * float(np.vdot(self._reaction_prev + reaction, du.reshape(-1)[self._prescribed]))
+            self._reaction_prev = reaction
+            a.reshape(-1)[self._prescribed] = a_pres
+        L.coupling_work += 0.5 * float(np.vdot(self._f_coupling_prev + self.f_coupling, du))
+        self._f_coupling_prev = self.f_coupling.copy()
+        s.a, s.f_ext = a, f_ext
+
+    def _prescribed_acceleration(self) -> np.ndarray:
+        """Acceleration of the prescribed DOFs at t_n: central difference of v(t) over dt."""
+        t, dt = self.state.t, getattr(self, "_dt", 0.0)
+        a = np.zeros(self.region.ndof)
+        if dt > 0:
+            for sup in self.supports:
+                a[sup.dofs] = (sup.velocity(t + 0.5 * dt) - sup.velocity(t - 0.5 * dt)) / dt
+        return a[self._prescribed]
+
+    def kick(self, dt: float) -> None:
+        s = self.state
+        s.v += 0.5 * dt * s.a
+        if self._prescribed.size:
+            vflat = s.v.reshape(-1)
+            for sup in self.supports:
+                vflat[sup.dofs] = sup.velocity(s.t)
+        ke = self.kinetic_energy()
+        if self.kinetic_damping and ke < self._ke_prev:
+            s.v[:] = 0.0  # past a kinetic-energy peak: restart from rest (dynamic relaxation)
+            ke = 0.0
+        self._ke_prev = ke
+        self.ledger.kinetic = ke
+
+    def step(self, dt: float) -> None:
+        """One uncoupled central-difference step."""
+        self.kick_drift(dt)
+        self.compute_forces()
+        self.kick(dt)
+
+    def start(self) -> None:
+        """Accelerations at t = 0 from the initial state (call once before stepping)."""
+        self._du = np.zeros_like(self.state.u)
+        self.compute_forces()
+        self.ledger = EnergyLedger(kinetic=self.kinetic_energy())
+
+    # -- energies ----------------------------------------------------------------------------
+    def kinetic_energy(self) -> float:
+        return 0.5 * float(np.einsum("n,ni,ni->", self.m, self.state.v, self.state.v))
+
+    def energies(self) -> dict[str, float]:
+        """The ledger with the current stored strain energy (J)."""
+        L = self.ledger
+        L.internal = self.region.strain_energy(self.state.u)
+        return dict(kinetic=L.kinetic, internal=L.internal, external_work=L.external_work + L.support_work + L.coupling_work,
+                    dissipated=L.damping)
+
+    def _damping_force(self, v: np.ndarray) -> np.ndarray:
+        f = 0.0
+        if self.alpha:
+            f = self.alpha * self.m[:, None] * v
+        if self.beta:
+            f = f + self.beta * (self.region.K @ v.ravel()).reshape(v.shape)
+        return np.zeros_like(v) + f

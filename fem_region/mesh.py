@@ -1,0 +1,60 @@
+"""Structured mesh generators (graded towards a region) and file meshes through meshio.
+
+Returns scikit-fem meshes; coordinates in m.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import skfem
+
+from .elements import ELEMENTS
+
+
+def graded(a: float, b: float, n: int, ratio: float = 1.0, toward: float | None = None) -> np.ndarray:
+    """n + 1 coordinates on [a, b]; element size grows by ``ratio`` per element away from ``toward``.
+
+    ratio = 1 gives a uniform spacing; toward = a point in [a, b] where the elements are smallest.
+    """
+    if ratio == 1.0 or toward is None:
+        return np.linspace(a, b, n + 1)
+    if not a <= toward <= b:
+        raise ValueError(f"grading point {toward} outside [{a}, {b}]")
+    # split n between the two sides in proportion to their lengths, grade each side
+    nl = int(round(n * (toward - a) / (b - a)))
+    left = _geometric(toward, a, nl, ratio) if nl else np.array([toward])
+    right = _geometric(toward, b, n - nl, ratio) if n - nl else np.array([toward])
+    return np.concatenate([left[::-1], right[1:]])
+
+
+def _geometric(start: float, end: float, n: int, ratio: float) -> np.ndarray:
+    h = ratio ** np.arange(n)
+    return start + (end - start) * np.concatenate([[0.0], np.cumsum(h) / h.sum()])
+
+
+def rectangle(xs: np.ndarray, ys: np.ndarray, element: str = "quad4") -> skfem.Mesh:
+    """Tensor-product 2D mesh on the coordinate lines xs, ys (m); element 'quad4' or 'tri3'."""
+    if element not in ("quad4", "tri3"):
+        raise ValueError(f"element {element!r}: 2D elements are quad4, tri3")
+    return ELEMENTS[element].mesh_cls.init_tensor(np.asarray(xs, float), np.asarray(ys, float))
+
+
+def box(xs: np.ndarray, ys: np.ndarray, zs: np.ndarray, element: str = "hex8") -> skfem.Mesh:
+    """Tensor-product 3D mesh; element 'hex8' or 'tet4'."""
+    if element not in ("hex8", "tet4"):
+        raise ValueError(f"element {element!r}: 3D elements are hex8, tet4")
+    return ELEMENTS[element].mesh_cls.init_tensor(*(np.asarray(c, float) for c in (xs, ys, zs)))
+
+
+def read(path: str | Path) -> skfem.Mesh:
+    """Any mesh meshio reads (Gmsh .msh, XDMF, VTK ...) as a scikit-fem mesh."""
+    return skfem.Mesh.load(str(path))
+
+
+def element_name(mesh: skfem.Mesh) -> str:
+    """The ElementType name matching a scikit-fem mesh."""
+    for name, e in ELEMENTS.items():
+        if isinstance(mesh, e.mesh_cls):
+            return name
+    raise ValueError(f"unsupported mesh type {type(mesh).__name__}")

@@ -1,0 +1,208 @@
+"""FemRegion: a mesh, an element type and per-element materials tied into explicit operators.
+
+Nodal arrays are (n_nodes, dim) in SI units; the flat DOF index of node a, component i is
+``a * dim + i``. In 2D every volume integral carries the out-of-plane ``thickness``, so forces
+are in N and masses in kg.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+import skfem
+
+from .elements import ElementType
+from .materials import voigt_blocks
+
+INTEGRATIONS = ("full", "selective")
+FORMULATIONS = ("linear", "total_lagrangian")
+
+
+def strain_displacement(dN: np.ndarray) -> np.ndarray:
+    """dN (..., n_loc, dim) 1/m -> small-strain B (..., n_strain, n_loc * dim), Voigt order."""
+    *lead, nloc, dim = dN.shape
+    ns = 3 if dim == 2 else 6
+    B = np.zeros((*lead, ns, nloc, dim))
+    for i in range(dim):
+        B[..., i, :, i] = dN[..., i]
+    pairs = [(0, 1)] if dim == 2 else [(1, 2), (0, 2), (0, 1)]
+    for s, (i, j) in enumerate(pairs, start=dim):
+        B[..., s, :, i] = dN[..., j]
+        B[..., s, :, j] = dN[..., i]
+    return B.reshape(*lead, ns, nloc * dim)
+
+
+@dataclass
+class Quadrature:
+    """Shape-function data of one integration rule on every element.
+
+    N: (nel, nqp, n_loc) -; dN: (nel, nqp, n_loc, dim) 1/m; dx: (nel, nqp) m^3 (thickness
+    included in 2D); voigt: which Voigt components this rule integrates (selective schemes
+    integrate normal and shear parts with different rules).
+    """
+
+    N: np.ndarray
+    dN: np.ndarray
+    dx: np.ndarray
+    voigt: list[int]
+
+
+def _quadrature(mesh, etype: ElementType, rule, thickness: float, voigt: list[int]) -> Quadrature:
+    kw = {"quadrature": rule} if isinstance(rule, tuple) else {"intorder": rule}
+    basis = skfem.Basis(mesh, etype.element_cls(), **kw)
+    N = np.stack([b[0].value for b in basis.basis], axis=-1)  # (nel, nqp, nloc)
+    dN = np.stack([b[0].grad for b in basis.basis], axis=-1)  # (dim, nel, nqp, nloc)
+    return Quadrature(N, np.moveaxis(dN, 0, -1), basis.dx * thickness, voigt)
+
+
+@dataclass
+class FemRegion:
+    """Explicit-dynamics operators of one FEM region.
+
+    mesh: skfem mesh (coordinates ``mesh.p`` (dim, n_nodes) m); D: (nel, ns, ns) Pa, the
+    plane (2D) or 3D constitutive matrix per element; rho: (nel,) kg/m^3; thickness: m,
+    out-of-plane width in 2D (1 in 3D); integration: "full" or "selective" (normal strains
+    fully integrated, shear at the centroid: removes shear locking in bending, needs a D
+    without normal-shear coupling); formulation: "linear" (small strain, assembled K) or
+    "total_lagrangian" (St Venant-Kirchhoff, large rotations).
+    """
+
+    mesh: skfem.Mesh
+    etype: ElementType
+    D: np.ndarray
+    rho: np.ndarray
+    thickness: float = 1.0
+    integration: str = "full"
+    formulation: str = "linear"
+    rules: list[Quadrature] = field(init=False)
+    mass: np.ndarray = field(init=False)  # (n_nodes,) kg, lumped
+    K: sp.csr_matrix = field(init=False)  # (ndof, ndof) N/m, small-strain stiffness
+
+    def __post_init__(self):
+        dim, nel = self.dim, self.n_elements
+        self.D = np.broadcast_to(np.asarray(self.D, float), (nel,) + np.shape(self.D)[-2:]).copy()
+        self.rho = np.broadcast_to(np.asarray(self.rho, float), (nel,)).copy()
+        normal, shear = voigt_blocks(dim)
+        full = _quadrature(self.mesh, self.etype, self.etype.full_order, self.thickness, normal + shear)
+        if self.integration == "full":
+            self.rules = [full]
+        elif self.integration == "selective":
+            coupling = np.abs(self.D[:, normal][:, :, shear]).max()
+            if coupling > 1e-12 * np.abs(self.D).max():
+                raise ValueError("integration = 'selective' needs materials without normal-shear "
+                                 "coupling (off-axis plies in 3D have it): use 'full'")
+            full.voigt = normal
+            one = _quadrature(self.mesh, self.etype, self.etype.one_point_rule(), self.thickness, shear)
+            self.rules = [full, one]
+        else:
+            raise ValueError(f"integration {self.integration!r}: allowed {INTEGRATIONS}")
+        if self.formulation not in FORMULATIONS:
+            raise ValueError(f"formulation {self.formulation!r}: allowed {FORMULATIONS}")
+        self.mass = np.bincount(self.mesh.t.ravel(),
+                                np.einsum("eqa,e,eq->ae", full.N, self.rho, full.dx).ravel(),
+                                minlength=self.n_nodes)  # row-sum lumping: sums to the exact mass
+        self._edofs = (self.mesh.t.T[:, :, None] * dim + np.arange(dim)).reshape(nel, -1)
+        self.ke = self._element_stiffness()
+        r = np.repeat(self._edofs, self._edofs.shape[1], axis=1).ravel()
+        c = np.tile(self._edofs, (1, self._edofs.shape[1])).ravel()
+        self.K = sp.csr_matrix((self.ke.ravel(), (r, c)), shape=(self.ndof, self.ndof))
+
+    # -- sizes -----------------------------------------------------------------------------
+    @property
+    def dim(self) -> int:
+        return self.mesh.p.shape[0]
+
+    @property
+    def n_nodes(self) -> int:
+        return self.mesh.p.shape[1]
+
+    @property
+    def n_elements(self) -> int:
+        return self.mesh.t.shape[1]
+
+    @property
+    def ndof(self) -> int:
+        return self.n_nodes * self.dim
+
+    @property
+    def X(self) -> np.ndarray:
+        """(n_nodes, dim) m, reference coordinates."""
+        return self.mesh.p.T
+
+    def _masked_D(self, voigt: list[int]) -> np.ndarray:
+        Dm = np.zeros_like(self.D)
+        Dm[:, np.ix_(voigt, voigt)[0], np.ix_(voigt, voigt)[1]] = self.D[:, voigt][:, :, voigt]
+        return Dm
+
+    def _element_stiffness(self) -> np.ndarray:
+        """(nel, n_loc*dim, n_loc*dim) N/m small-strain element stiffness."""
+        ke = 0.0
+        for q in self.rules:
+            B = strain_displacement(q.dN)
+            ke = ke + np.einsum("eqsa,est,eqtb,eq->eab", B, self._masked_D(q.voigt), B, q.dx)
+        return ke
+
+    # -- explicit operators ------------------------------------------------------------------
+    def element_masses(self) -> np.ndarray:
+        """(nel, n_loc) kg: each element's row-sum lumped mass at its nodes."""
+        q = self.rules[0]
+        return np.einsum("eqa,e,eq->ea", q.N, self.rho, q.dx)
+
+    def critical_dt(self) -> float:
+        """Central-difference stable step 2 / omega_max, bounded element by element (s).
+
+        Irons' theorem: the assembled omega_max is at most the largest element omega_max of
+        k_e phi = omega^2 m_e phi with the element's own lumped mass m_e.
+        """
+        me = np.repeat(self.element_masses(), self.dim, axis=1)
+        s = 1.0 / np.sqrt(me)
+        lam = np.linalg.eigvalsh(self.ke * s[:, :, None] * s[:, None, :])[:, -1]
+        return 2.0 / np.sqrt(lam.max())
+
+    def internal_force(self, u: np.ndarray) -> np.ndarray:
+        """u: (n_nodes, dim) m -> internal nodal force (n_nodes, dim) N."""
+        if self.formulation == "linear":
+            return (self.K @ u.ravel()).reshape(u.shape)
+        fe = 0.0
+        for q, F, S in self._green_lagrange(u):
+            P = F @ S  # first Piola-Kirchhoff, (nel, nqp, dim, dim)
+            fe = fe + np.einsum("eqij,eqaj,eq->eai", P, q.dN, q.dx)
+        return np.bincount(self._edofs.ravel(), np.reshape(fe, -1), minlength=self.ndof).reshape(u.shape)
+
+    def strain_energy(self, u: np.ndarray) -> float:
+        """Stored elastic energy (J) at displacement u (n_nodes, dim) m."""
+        if self.formulation == "linear":
+            x = u.ravel()
+            return 0.5 * float(x @ (self.K @ x))
+        return sum(0.5 * float(np.einsum("eqij,eqij,eq->", E, S, q.dx))
+                   for q, E, S in self._green_lagrange(u, want_E=True))
+
+    def _green_lagrange(self, u: np.ndarray, want_E: bool = False):
+        """Per rule: (rule, F or E (nel, nqp, dim, dim), second PK stress S) for the rule's
+        Voigt components (St Venant-Kirchhoff: S = D E)."""
+        dim = self.dim
+        ue = u[self.mesh.t.T]  # (nel, nloc, dim)
+        pairs = [(0, 0), (1, 1), (0, 1)] if dim == 2 else [(0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1)]
+        eng = np.array([1.0 if i == j else 2.0 for i, j in pairs])
+        I, J = np.array(pairs).T
+        for q in self.rules:
+            H = np.einsum("eai,eqaj->eqij", ue, q.dN)
+            F = H + np.eye(dim)
+            E = 0.5 * (H + np.swapaxes(H, -1, -2) + np.swapaxes(H, -1, -2) @ H)
+            Sv = np.einsum("est,eqt->eqs", self._masked_D(q.voigt), E[..., I, J] * eng)
+            S = np.zeros_like(E)
+            S[..., I, J] = Sv
+            S[..., J, I] = Sv
+            yield q, (E if want_E else F), S
+
+    def centroid_strain_stress(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Small-strain (nel, ns) strain and stress (Pa) at element centroids (Voigt)."""
+        q = _quadrature(self.mesh, self.etype, self.etype.one_point_rule(), 1.0, [])
+        B = strain_displacement(q.dN)[:, 0]
+        eps = np.einsum("esa,ea->es", B, u.ravel()[self._edofs])
+        return eps, np.einsum("est,et->es", self.D, eps)
+
+    def nodes_where(self, predicate) -> np.ndarray:
+        """Indices of nodes whose reference coordinates (dim, n) satisfy ``predicate``."""
+        return np.flatnonzero(predicate(self.mesh.p))
