@@ -1,9 +1,14 @@
 """Checks against closed forms, recorded in the summary.json "checks" format."""
 from __future__ import annotations
 
+import math
+
 
 def check(value: float, reference: float, tol: float, source: str) -> dict:
-    """Relative-error check |value - reference| / |reference| <= tol."""
+    """Relative-error check |value - reference| / |reference| <= tol (a non-finite value fails)."""
+    if not math.isfinite(value):
+        return {"value": None, "reference": float(reference), "rel_err": None, "tol": float(tol),
+                "passed": False, "source": source + " (value not finite: the run did not produce it)"}
     rel = abs(value - reference) / abs(reference) if reference else abs(value)
     return {"value": float(value), "reference": float(reference), "rel_err": float(rel),
             "tol": float(tol), "passed": bool(rel <= tol), "source": source}

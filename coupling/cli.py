@@ -83,7 +83,8 @@ def _report(s: dict, out) -> None:
         print(f"  {s['message']}")
     for name, c in s["checks"].items():
         err = f"rel_err {c['rel_err']:.2e}" if c["rel_err"] is not None else f"limit {c['tol']:g}"
-        print(f"  check {name}: {c['value']:.6g} vs {c['reference']:.6g} ({err}, "
+        value = "n/a" if c["value"] is None else f"{c['value']:.6g}"
+        print(f"  check {name}: {value} vs {c['reference']:.6g} ({err}, "
               f"{'PASS' if c['passed'] else 'FAIL'}; {c['source']})")
     print(f"  results: {out}/summary.json")
     plots = sorted((out / "plots").glob("*.png"))

@@ -51,7 +51,7 @@ class Quadrature:
 def _quadrature(mesh, etype: ElementType, rule, thickness: float, voigt: list[int]) -> Quadrature:
     kw = {"quadrature": rule} if isinstance(rule, tuple) else {"intorder": rule}
     basis = skfem.Basis(mesh, etype.element_cls(), **kw)
-    N = np.stack([b[0].value for b in basis.basis], axis=-1)  # (nel, nqp, nloc)
+    N = np.stack([np.asarray(b[0]) for b in basis.basis], axis=-1)  # (nel, nqp, nloc)
     dN = np.stack([b[0].grad for b in basis.basis], axis=-1)  # (dim, nel, nqp, nloc)
     return Quadrature(N, np.moveaxis(dN, 0, -1), basis.dx * thickness, voigt)
 

@@ -63,7 +63,8 @@ def evaluate(p: dict, h: dict):
     arrivals = []
     for s in STATIONS:
         v = h[f"velocity_x_{s:g}L"]
-        arrivals.append(float(np.trapz(t * v, t) / np.trapz(v, t)))
+        area = np.trapz(v, t)  # zero if the pulse never reached the station (t_end too short)
+        arrivals.append(float(np.trapz(t * v, t) / area) if area > 0 else float("nan"))
     c = (STATIONS[1] - STATIONS[0]) * L / (arrivals[1] - arrivals[0])
     qoi = {"wave_speed": c, "arrival_time_near": arrivals[0], "arrival_time_far": arrivals[1]}
     checks = {"wave_speed": check(c, bar_speed(p), 0.01, "bar wave speed sqrt(E/rho)")}

@@ -1,0 +1,6 @@
+#!/usr/bin/env bash
+# Quick start 2: set up if needed, then run the default test suite (arguments go to pytest).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+./scripts/setup.sh
+exec .venv/bin/python -m pytest -q "$@"
