@@ -62,6 +62,7 @@ class Simulation:
     field_frames: int = 0
     energy_growth_tol: float = 0.05
     close: Callable[[], None] = lambda: None
+    timing_correction: Callable[[], dict[str, float]] | None = None
     versions: dict[str, str] = field(default_factory=dict)
 
 
@@ -135,13 +136,20 @@ def run_clock(sim: Simulation, on_sample: Callable[[int, float], None] | None = 
             if frame_every and on_frame and step % frame_every == 0:
                 frame(step)
     except Instability as exc:
-        exc.partial = _result(hist, timing, sim.energies(), step)  # type: ignore[attr-defined]
+        exc.partial = _result(hist, _corrected(timing, sim), sim.energies(), step)  # type: ignore[attr-defined]
         raise
-    return _result(hist, timing, sim.energies(), sim.n_steps)
+    return _result(hist, _corrected(timing, sim), sim.energies(), sim.n_steps)
+
+
+def _corrected(timing: dict, sim: Simulation) -> dict:
+    if sim.timing_correction:
+        for k, v in sim.timing_correction().items():
+            timing[k] += v
+    return timing
 
 
 def _result(hist, timing, energy, steps) -> dict:
     history = {k: np.asarray(v) for k, v in hist.items()}
     err = history["balance_error_rel"]
-    energy = dict(energy, balance_error_rel=float(err.max()) if err.size else 0.0)
+    energy = dict(energy, balance_error_rel=float(err[-1]) if err.size else 0.0)
     return {"history": history, "timing_s": timing, "energy": energy, "steps": steps}

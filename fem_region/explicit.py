@@ -88,6 +88,7 @@ class ExplicitDynamics:
         self.ledger = EnergyLedger()
         self._prescribed = np.unique(np.concatenate([s.dofs for s in self.supports])) if self.supports else np.zeros(0, int)
         self._f_coupling_prev = zero.copy()
+        self._du, self._dt = zero.copy(), 0.0
         self._reaction_prev = np.zeros(self._prescribed.size)
         self._ke_prev = 0.0
 
@@ -146,6 +147,7 @@ class ExplicitDynamics:
         L.coupling_work += 0.5 * float(np.vdot(self._f_coupling_prev + self.f_coupling, du))
         self._f_coupling_prev = self.f_coupling.copy()
         s.a, s.f_ext = a, f_ext
+        self._u_at_forces = s.u.copy()  # the ledger's time level: forces, work and kinetic at t_n
 
     def _prescribed_acceleration(self) -> np.ndarray:
         """Acceleration of the prescribed DOFs at t_n: central difference of v(t) over dt."""
@@ -189,8 +191,9 @@ class ExplicitDynamics:
     def energies(self) -> dict[str, float]:
         """The ledger with the current stored strain energy (J)."""
         L = self.ledger
-        L.internal = self.region.strain_energy(self.state.u)
-        return dict(kinetic=L.kinetic, internal=L.internal, external_work=L.external_work + L.support_work + L.coupling_work,
+        L.internal = self.region.strain_energy(getattr(self, "_u_at_forces", self.state.u))
+        # coupling work is not external to a coupled system: the coupler accounts for it
+        return dict(kinetic=L.kinetic, internal=L.internal, external_work=L.external_work + L.support_work,
                     dissipated=L.damping)
 
     def _damping_force(self, v: np.ndarray) -> np.ndarray:

@@ -3,5 +3,5 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/setup.sh
-MAIN_CASE=${MAIN_CASE:-cantilever}
+MAIN_CASE=${MAIN_CASE:-chain_consistency}
 exec .venv/bin/femdem run "$MAIN_CASE" "$@"

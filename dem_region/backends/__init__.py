@@ -1,0 +1,30 @@
+"""One word picks a DEM engine: name -> adapter module, imported lazily.
+
+Only the adapter module of an engine imports that engine.
+"""
+from __future__ import annotations
+
+import importlib
+
+from .base import DemBackend, EngineUnavailable
+
+# name -> (module, class, what a user does when it is missing)
+_REGISTRY = {
+    "yade": ("dem_region.backends.yade", "YadeBackend", "./scripts/setup.sh (Debian packages yade, python3-yade)"),
+    "liggghts": (None, None, "not implemented yet (issue #7)"),
+    "lammps": (None, None, "not implemented yet (issue #8)"),
+}
+NAMES = tuple(_REGISTRY)
+
+
+def get_backend(name: str) -> type[DemBackend]:
+    """The adapter class for engine ``name``; EngineUnavailable says why not and how to fix it."""
+    if name not in _REGISTRY:
+        raise EngineUnavailable(f"--dem {name}: allowed {', '.join(NAMES)}")
+    module, cls, fix = _REGISTRY[name]
+    if module is None:
+        raise EngineUnavailable(f"--dem {name}: {fix}; available now: yade")
+    try:
+        return getattr(importlib.import_module(module), cls)
+    except ImportError as exc:
+        raise EngineUnavailable(f"--dem {name}: engine does not load ({exc}); fix: {fix}") from None

@@ -1,0 +1,58 @@
+"""Assembling a coupled Simulation: engine, transition interface, shared clock, outputs."""
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+
+from dem_region.backends import EngineUnavailable, get_backend
+from dem_region.scene import DemScene
+from fem_region.explicit import ExplicitDynamics
+from interfaces.transition import InterfaceError, TransitionInterface
+
+from ..coupled import KinematicTie
+from ..params import CaseError
+from ..simulation import FieldFrame, Simulation
+from .common import n_steps, time_step
+
+
+def coupled_simulation(p: dict, make_fem: Callable[[np.ndarray], ExplicitDynamics], scene: DemScene,
+                       dem: str, t_end_default: float, history_every: int = 0):
+    """(Simulation, KinematicTie) for a FEM far field made by ``make_fem(extra_mass)`` and a
+    DEM ``scene`` whose group "interface" is slaved to the FEM."""
+    if p["clock.substeps"] > 1:
+        raise CaseError(f"clock.substeps = {p['clock.substeps']}: subcycling is not implemented yet; allowed 0 or 1")
+    try:
+        backend = get_backend(dem)()
+    except EngineUnavailable as exc:
+        raise CaseError(str(exc)) from None
+    probe_fem = make_fem(None)
+    try:
+        itf = TransitionInterface.build(probe_fem.region, scene.x, scene.groups.get("interface", np.zeros(0, int)))
+    except InterfaceError as exc:
+        raise CaseError(f"interface: {exc}") from None
+    fem = make_fem(itf.share_mass(scene.mass[itf.ids]))
+    backend.build(scene)
+    dt_fem, dt_dem = fem.critical_dt(), backend.critical_dt()
+    n, dt = n_steps(p, t_end_default, time_step(p, min(dt_fem, dt_dem)))
+    tie = KinematicTie(fem, backend, itf, dt)
+    region = fem.region
+    pts0 = np.vstack([np.pad(region.X, ((0, 0), (0, 3 - region.dim))), scene.x])
+    cell = {"quad4": "quad", "tri3": "triangle", "hex8": "hexahedron", "tet4": "tetra"}[region.etype.name]
+    cells = {cell: region.mesh.t.T, "vertex": (region.n_nodes + np.arange(scene.n))[:, None]}
+
+    def fields() -> FieldFrame:
+        u = np.vstack([np.pad(fem.state.u, ((0, 0), (0, 3 - region.dim))), backend.positions() - scene.x])
+        radius = np.concatenate([np.zeros(region.n_nodes), scene.radius])
+        return FieldFrame(pts0, cells, {"displacement": u, "radius": radius})
+
+    sim = Simulation(
+        stages=tie.stages(), dt=dt, n_steps=n,
+        history_every=history_every or p["output.history_every"] or max(1, n // 1000),
+        probes={}, energies=tie.energies,
+        counts={"fem_nodes": region.n_nodes, "fem_elements": region.n_elements, "particles": scene.n,
+                "bonds": len(scene.bonds), "interface_particles": len(itf.ids)},
+        clock_info={"dt_fem": dt, "dt_dem": dt, "dt_stable_fem": dt_fem, "dt_stable_dem": dt_dem, "substeps": 1},
+        fields=fields, field_frames=p["output.field_frames"], energy_growth_tol=p["guards.energy_growth"],
+        close=backend.finalize, versions={dem: backend.version}, timing_correction=tie.timing_correction)
+    return sim, tie

@@ -1,0 +1,50 @@
+"""The back-end contract: one small class shaped like a coupling participant (preCICE style).
+
+Order of calls: ``build(scene)`` once; ``set_dt``; then per step ``advance(between)``, which
+(1) makes the forces at the current positions available, (2) calls ``between()``, where the
+orchestrator reads interface forces and writes interface velocities, (3) moves every particle
+to the next step (leapfrog; interface particles follow the velocity written in (2)).
+Array data moves in bulk: ids (k,) int, vectors (k, 3) SI.
+"""
+from __future__ import annotations
+
+from typing import Callable, Protocol
+
+import numpy as np
+
+from ..scene import DemScene
+
+
+class EngineUnavailable(ValueError):
+    """The engine is unknown, not installed or not implemented (bad input, exit code 2)."""
+
+
+class DemBackend(Protocol):
+    name: str
+    version: str
+    native_laws: tuple[str, ...]
+
+    def build(self, scene: DemScene) -> None: ...
+
+    def critical_dt(self) -> float: ...
+
+    def set_dt(self, dt: float) -> None: ...
+
+    def advance(self, between: Callable[[], None] | None = None) -> None: ...
+
+    def prescribe(self, ids: np.ndarray) -> None:
+        """Slave particles ``ids`` (their motion comes from set_velocities only)."""
+
+    def set_velocities(self, ids: np.ndarray, v: np.ndarray) -> None: ...
+
+    def forces(self, ids: np.ndarray) -> np.ndarray:
+        """(k, 3) N: force the rest of the scene exerts on particles ``ids`` at this step."""
+
+    def positions(self) -> np.ndarray: ...
+
+    def velocities(self) -> np.ndarray: ...
+
+    def energies(self) -> dict[str, float]:
+        """{kinetic, elastic, dissipated} J, as far as the engine reports them."""
+
+    def finalize(self) -> None: ...

@@ -1,0 +1,64 @@
+"""Transition interface: interface particles hosted by FEM elements, and the maps across it.
+
+W (k, n_nodes) holds the shape-function weights N_a(xi_p) of each interface particle p in
+its host element. The displacement / velocity map FEM -> particles is x_p = W x, and the
+force map particles -> FEM is its transpose f = W^T F, so the interface does no net work
+and conserves momentum; particle masses are shared to the nodes by the same weights.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+import skfem
+
+from fem_region.region import FemRegion
+
+
+class InterfaceError(ValueError):
+    """An interface particle without a host element, or weights that do not sum to one."""
+
+
+@dataclass
+class TransitionInterface:
+    """ids: (k,) interface particle indices; W: (k, n_nodes) sparse weights; dim: FEM dimension."""
+
+    ids: np.ndarray
+    W: sp.csr_matrix
+    dim: int
+
+    @classmethod
+    def build(cls, region: FemRegion, x: np.ndarray, ids: np.ndarray, tol: float = 1e-9) -> "TransitionInterface":
+        """Host particles ``ids`` at positions x (n, 3) m in the elements of ``region``."""
+        ids = np.asarray(ids, int)
+        if ids.size == 0:
+            raise InterfaceError("interface band has no particles")
+        pts = x[ids, : region.dim].T
+        basis = skfem.Basis(region.mesh, region.etype.element_cls())
+        try:
+            W = basis.probes(pts).tocsr()
+        except ValueError as exc:  # skfem's element finder: a point outside every element
+            raise InterfaceError(f"interface particle outside the FEM mesh ({exc})") from None
+        W.eliminate_zeros()
+        rows = np.asarray(W.sum(axis=1)).ravel()
+        bad = np.flatnonzero(np.abs(rows - 1.0) > tol)
+        if bad.size:
+            p = ids[bad[0]]
+            raise InterfaceError(f"interface particle {p} at {x[p]} has weights summing to {rows[bad[0]]:.6g}, not 1 "
+                                 "(no FEM element hosts it)")
+        return cls(ids, W, region.dim)
+
+    def to_particles(self, nodal: np.ndarray) -> np.ndarray:
+        """nodal (n_nodes, dim) -> (k, 3) values at the interface particles (z = 0 in 2D)."""
+        out = np.zeros((len(self.ids), 3))
+        out[:, : self.dim] = self.W @ nodal
+        return out
+
+    def to_nodes(self, F: np.ndarray) -> np.ndarray:
+        """F (k, 3) N on the particles -> (n_nodes, dim) N on the nodes (transpose map)."""
+        return self.W.T @ F[:, : self.dim]
+
+    def share_mass(self, m: np.ndarray) -> np.ndarray:
+        """m (k,) kg of the interface particles -> (n_nodes,) kg added to the nodes."""
+        return self.W.T @ m

@@ -1,0 +1,76 @@
+"""Coupled FEM + DEM (YADE) runs and the transition-interface maps."""
+import numpy as np
+import pytest
+import skfem
+from hypothesis import given, settings, strategies as st
+
+from conftest import assert_checks
+from fem_region import materials
+from fem_region.elements import ELEMENTS
+from fem_region.region import FemRegion
+from interfaces.transition import InterfaceError, TransitionInterface
+
+
+@pytest.mark.parametrize("sets", [[], ["chain.fem_elements=7", "chain.particles=13", "material.E=2e9",
+                                       "particle.radius=0.002"]])
+def test_chain_consistency_matches_monolithic(femdem, sets):
+    code, s, _ = femdem("run", "chain_consistency", *sum((["--set", x] for x in sets), []))
+    assert code == 0
+    assert_checks(s)
+    assert s["counts"]["interface_particles"] == 1
+    assert s["qoi"]["max_displacement"] > 0  # the pulse really crossed into the DEM part
+    assert s["energy"]["balance_error_rel"] < 0.02
+    assert set(s["timing_s"]) >= {"fem", "dem", "interface", "io", "orchestrator", "total"}
+
+
+@pytest.mark.parametrize("engine", ["liggghts", "lammps"])
+def test_engines_not_built_yet_are_refused_clearly(femdem, engine):
+    code, s, err = femdem("run", "chain_consistency", "--dem", engine)
+    assert code == 2 and s is None
+    assert engine in err and "not implemented" in err and len(err.strip().splitlines()) == 1
+
+
+def test_subcycling_not_yet_refused(femdem):
+    code, _, err = femdem("run", "chain_consistency", "--set", "clock.substeps=5")
+    assert code == 2 and "clock.substeps = 5" in err
+
+
+def _region(kind, nx, ny, jitter, seed):
+    rng = np.random.default_rng(seed)
+    m = ELEMENTS[kind].mesh_cls.init_tensor(np.linspace(0, 1, nx + 1), np.linspace(0, 1, ny + 1))
+    p = m.p.copy()
+    inner = (p[0] > 0) & (p[0] < 1) & (p[1] > 0) & (p[1] < 1)
+    p[:, inner] += jitter / max(nx, ny) * rng.uniform(-1, 1, (2, inner.sum()))
+    m = type(m)(p, m.t)
+    return FemRegion(m, ELEMENTS[kind], materials.plane_strain(materials.isotropic(1e9, 0.3)), 1000.0, 1.0)
+
+
+@settings(max_examples=25, deadline=None)
+@given(kind=st.sampled_from(["quad4", "tri3"]), nx=st.integers(1, 6), ny=st.integers(1, 6),
+       jitter=st.floats(0, 0.3), n=st.integers(1, 40), seed=st.integers(0, 2**31))
+def test_interface_maps(kind, nx, ny, jitter, n, seed):
+    """Weights sum to one, linear fields are reproduced, forces map by the transpose
+    (equal virtual work) and total force (momentum rate) is conserved."""
+    rng = np.random.default_rng(seed)
+    r = _region(kind, nx, ny, jitter, seed)
+    x = np.zeros((n, 3))
+    x[:, :2] = rng.uniform(0.02, 0.98, (n, 2))
+    itf = TransitionInterface.build(r, x, np.arange(n))
+    assert np.allclose(itf.W.sum(axis=1), 1.0, atol=1e-12)
+    G = rng.normal(size=(2, 2))
+    assert np.allclose(itf.to_particles(r.X @ G.T)[:, :2], x[:, :2] @ G.T, atol=1e-10)
+    F = rng.normal(size=(n, 3))
+    v = rng.normal(size=(r.n_nodes, 2))
+    assert np.isclose(np.vdot(itf.to_nodes(F), v), np.vdot(F, itf.to_particles(v)), rtol=1e-10, atol=1e-12)
+    assert np.allclose(itf.to_nodes(F).sum(axis=0), F[:, :2].sum(axis=0), atol=1e-10)
+    m = rng.uniform(0.1, 1.0, n)
+    assert itf.share_mass(m).sum() == pytest.approx(m.sum(), rel=1e-12)
+
+
+def test_interface_particle_outside_mesh_is_refused():
+    r = _region("quad4", 2, 2, 0.0, 0)
+    x = np.array([[0.5, 0.5, 0.0], [1.5, 0.5, 0.0]])
+    with pytest.raises(InterfaceError):
+        TransitionInterface.build(r, x, np.arange(2))
+    with pytest.raises(InterfaceError):
+        TransitionInterface.build(r, x, np.zeros(0, int))
