@@ -202,4 +202,7 @@ class ExplicitDynamics:
             f = self.alpha * self.m[:, None] * v
         if self.beta:
             f = f + self.beta * (self.region.K @ v.ravel()).reshape(v.shape)
+        hg = self.region.hourglass_viscous_force(v)
+        if hg is not None:
+            f = f + hg
         return np.zeros_like(v) + f

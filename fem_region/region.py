@@ -13,9 +13,10 @@ import scipy.sparse as sp
 import skfem
 
 from .elements import ElementType
+from .hourglass import HourglassControl
 from .materials import voigt_blocks
 
-INTEGRATIONS = ("full", "selective")
+INTEGRATIONS = ("full", "selective", "reduced")
 FORMULATIONS = ("linear", "total_lagrangian")
 
 
@@ -62,10 +63,12 @@ class FemRegion:
 
     mesh: skfem mesh (coordinates ``mesh.p`` (dim, n_nodes) m); D: (nel, ns, ns) Pa, the
     plane (2D) or 3D constitutive matrix per element; rho: (nel,) kg/m^3; thickness: m,
-    out-of-plane width in 2D (1 in 3D); integration: "full" or "selective" (normal strains
+    out-of-plane width in 2D (1 in 3D); integration: "full", "selective" (normal strains
     fully integrated, shear at the centroid: removes shear locking in bending, needs a D
-    without normal-shear coupling); formulation: "linear" (small strain, assembled K) or
-    "total_lagrangian" (St Venant-Kirchhoff, large rotations).
+    without normal-shear coupling) or "reduced" (one point, with hourglass control of form
+    ``hourglass`` and coefficient ``hourglass_kappa``); formulation: "linear" (small strain,
+    assembled K) or "total_lagrangian" (St Venant-Kirchhoff, large rotations; the hourglass
+    force stays small-strain).
     """
 
     mesh: skfem.Mesh
@@ -75,6 +78,8 @@ class FemRegion:
     thickness: float = 1.0
     integration: str = "full"
     formulation: str = "linear"
+    hourglass: str = "stiffness"
+    hourglass_kappa: float = 0.1
     rules: list[Quadrature] = field(init=False)
     mass: np.ndarray = field(init=False)  # (n_nodes,) kg, lumped
     K: sp.csr_matrix = field(init=False)  # (ndof, ndof) N/m, small-strain stiffness
@@ -95,6 +100,8 @@ class FemRegion:
             full.voigt = normal
             one = _quadrature(self.mesh, self.etype, self.etype.one_point_rule(), self.thickness, shear)
             self.rules = [full, one]
+        elif self.integration == "reduced":
+            self.rules = [_quadrature(self.mesh, self.etype, self.etype.one_point_rule(), self.thickness, normal + shear)]
         else:
             raise ValueError(f"integration {self.integration!r}: allowed {INTEGRATIONS}")
         if self.formulation not in FORMULATIONS:
@@ -103,6 +110,11 @@ class FemRegion:
                                 np.einsum("eqa,e,eq->ae", full.N, self.rho, full.dx).ravel(),
                                 minlength=self.n_nodes)  # row-sum lumping: sums to the exact mass
         self._edofs = (self.mesh.t.T[:, :, None] * dim + np.arange(dim)).reshape(nel, -1)
+        self.hg = None
+        if self.integration == "reduced" and self.etype.name in ("quad4", "hex8"):
+            one = self.rules[0]
+            self.hg = HourglassControl.build(self.X[self.mesh.t.T], one.dN[:, 0], one.dx[:, 0], self.D, self.rho,
+                                             self.etype.element_cls().doflocs, self.hourglass, self.hourglass_kappa)
         self.ke = self._element_stiffness()
         r = np.repeat(self._edofs, self._edofs.shape[1], axis=1).ravel()
         c = np.tile(self._edofs, (1, self._edofs.shape[1])).ravel()
@@ -141,6 +153,8 @@ class FemRegion:
         for q in self.rules:
             B = strain_displacement(q.dN)
             ke = ke + np.einsum("eqsa,est,eqtb,eq->eab", B, self._masked_D(q.voigt), B, q.dx)
+        if self.hg is not None:
+            ke = ke + self.hg.stiffness(self.dim)
         return ke
 
     # -- explicit operators ------------------------------------------------------------------
@@ -168,15 +182,30 @@ class FemRegion:
         for q, F, S in self._green_lagrange(u):
             P = F @ S  # first Piola-Kirchhoff, (nel, nqp, dim, dim)
             fe = fe + np.einsum("eqij,eqaj,eq->eai", P, q.dN, q.dx)
-        return np.bincount(self._edofs.ravel(), np.reshape(fe, -1), minlength=self.ndof).reshape(u.shape)
+        if self.hg is not None and self.hg.form == "stiffness":
+            fe = fe + self.hg.force(self.hg.k, u[self.mesh.t.T])
+        return self._scatter(fe, u.shape)
+
+    def _scatter(self, fe: np.ndarray, shape) -> np.ndarray:
+        """Element vectors (nel, n_loc, dim) -> assembled nodal array."""
+        return np.bincount(self._edofs.ravel(), np.reshape(fe, -1), minlength=self.ndof).reshape(shape)
+
+    def hourglass_viscous_force(self, v: np.ndarray) -> np.ndarray | None:
+        """(n_nodes, dim) N of the viscous hourglass form at velocity v, or None."""
+        if self.hg is None or self.hg.form != "viscous":
+            return None
+        return self._scatter(self.hg.force(self.hg.c, v[self.mesh.t.T]), v.shape)
 
     def strain_energy(self, u: np.ndarray) -> float:
         """Stored elastic energy (J) at displacement u (n_nodes, dim) m."""
         if self.formulation == "linear":
             x = u.ravel()
             return 0.5 * float(x @ (self.K @ x))
-        return sum(0.5 * float(np.einsum("eqij,eqij,eq->", E, S, q.dx))
-                   for q, E, S in self._green_lagrange(u, want_E=True))
+        energy = sum(0.5 * float(np.einsum("eqij,eqij,eq->", E, S, q.dx))
+                     for q, E, S in self._green_lagrange(u, want_E=True))
+        if self.hg is not None and self.hg.form == "stiffness":
+            energy += 0.5 * float(np.vdot(self.hg.force(self.hg.k, u[self.mesh.t.T]), u[self.mesh.t.T]))
+        return energy
 
     def _green_lagrange(self, u: np.ndarray, want_E: bool = False):
         """Per rule: (rule, F or E (nel, nqp, dim, dim), second PK stress S) for the rule's
