@@ -13,6 +13,8 @@ from typing import Callable
 
 import numpy as np
 
+from .bulk_viscosity import BulkViscosity
+from .impactor import RigidImpactor
 from .region import FemRegion
 
 TimeFunction = Callable[[float], float]
@@ -68,7 +70,10 @@ class ExplicitDynamics:
 
     alpha, beta: Rayleigh damping C = alpha M + beta K (1/s, s); kinetic_damping: dynamic
     relaxation by zeroing all velocities at each kinetic-energy peak (quasi-static runs).
-    extra_mass: (n_nodes,) kg added at nodes (e.g. interface particle masses shared to nodes).
+    extra_mass: (n_nodes,) kg added at nodes (e.g. interface particle masses shared to nodes);
+    bulk_viscosity: shock viscosity (BulkViscosity) or None; mass_scaling_dt: s, if > 0 the
+    density of every element whose stable step is below it is scaled up to reach it (the
+    added mass is reported by ``added_mass``).
     """
 
     region: FemRegion
@@ -78,10 +83,16 @@ class ExplicitDynamics:
     beta: float = 0.0
     kinetic_damping: bool = False
     extra_mass: np.ndarray | None = None
+    bulk_viscosity: BulkViscosity | None = None
+    mass_scaling_dt: float = 0.0
+    impactors: list[RigidImpactor] = field(default_factory=list)
 
     def __post_init__(self):
         r = self.region
-        self.m = r.mass + (0.0 if self.extra_mass is None else self.extra_mass)
+        self.density_scale, self.added_mass = None, np.zeros(r.n_nodes)
+        if self.mass_scaling_dt > 0:
+            self.density_scale, self.added_mass = r.mass_scaling(self.mass_scaling_dt)
+        self.m = r.mass + self.added_mass + (0.0 if self.extra_mass is None else self.extra_mass)
         zero = np.zeros((r.n_nodes, r.dim))
         self.state = FemState(zero.copy(), zero.copy(), zero.copy(), zero.copy())
         self.f_coupling = zero.copy()  # written by the interface stage before compute_forces
@@ -89,6 +100,10 @@ class ExplicitDynamics:
         self._prescribed = np.unique(np.concatenate([s.dofs for s in self.supports])) if self.supports else np.zeros(0, int)
         self._f_coupling_prev = zero.copy()
         self._du, self._dt = zero.copy(), 0.0
+        self._surface = r.mesh.boundary_nodes() if self.impactors else np.zeros(0, int)
+        self._contact_prev = [(np.zeros((len(self._surface), r.dim)), np.zeros(r.dim)) for _ in self.impactors]
+        self._contact_work = 0.0  # net work of the contact forces on both bodies (J)
+        self._contact_energy = 0.0  # stored penalty energy (J)
         self._reaction_prev = np.zeros(self._prescribed.size)
         self._ke_prev = 0.0
 
@@ -99,7 +114,9 @@ class ExplicitDynamics:
 
     def critical_dt(self) -> float:
         """Stable step (s) including the stiffness-proportional damping reduction."""
-        dt = self.region.critical_dt()
+        dt = self.region.critical_dt(self.density_scale)
+        for imp in self.impactors:
+            dt = min(dt, imp.critical_dt(self.m[self._surface]))
         if self.beta > 0:
             w = 2.0 / dt
             xi = 0.5 * self.beta * w
@@ -116,6 +133,10 @@ class ExplicitDynamics:
     def kick_drift(self, dt: float) -> None:
         s = self.state
         s.v += 0.5 * dt * s.a
+        for imp in self.impactors:
+            imp.v += 0.5 * dt * imp.a
+            imp.dx = dt * imp.v
+            imp.x += imp.dx
         vflat = s.v.reshape(-1)
         t_half = s.t + 0.5 * dt
         for sup in self.supports:
@@ -136,6 +157,8 @@ class ExplicitDynamics:
         L.external_work += 0.5 * float(np.vdot(s.f_ext + f_ext, du))
         L.damping += float(np.vdot(f_damp, du))
         f = f_ext - f_int - f_damp + self.f_coupling
+        if self.impactors:
+            f += self._contact(du)
         a = f / self.m[:, None]
         if self._prescribed.size:
             # the support supplies what the prescribed path needs beyond the residual force
@@ -149,6 +172,22 @@ class ExplicitDynamics:
         s.a, s.f_ext = a, f_ext
         self._u_at_forces = s.u.copy()  # the ledger's time level: forces, work and kinetic at t_n
 
+    def _contact(self, du: np.ndarray) -> np.ndarray:
+        """Penalty contact forces on the surface nodes; impactor accelerations; contact ledger."""
+        S, r = self._surface, self.region
+        f = np.zeros((r.n_nodes, r.dim))
+        self._contact_energy = 0.0
+        for k, imp in enumerate(self.impactors):
+            fc, energy = imp.forces(r.X[S] + self.state.u[S], self.state.v[S])
+            F = -fc.sum(axis=0)
+            fc_prev, F_prev = self._contact_prev[k]
+            self._contact_work += 0.5 * float(np.vdot(fc_prev + fc, du[S]) + (F_prev + F) @ imp.dx)
+            self._contact_prev[k] = (fc, F)
+            imp.a = F / imp.mass
+            f[S] += fc
+            self._contact_energy += energy
+        return f
+
     def _prescribed_acceleration(self) -> np.ndarray:
         """Acceleration of the prescribed DOFs at t_n: central difference of v(t) over dt."""
         t, dt = self.state.t, getattr(self, "_dt", 0.0)
@@ -161,6 +200,8 @@ class ExplicitDynamics:
     def kick(self, dt: float) -> None:
         s = self.state
         s.v += 0.5 * dt * s.a
+        for imp in self.impactors:
+            imp.v += 0.5 * dt * imp.a
         if self._prescribed.size:
             vflat = s.v.reshape(-1)
             for sup in self.supports:
@@ -186,15 +227,23 @@ class ExplicitDynamics:
 
     # -- energies ----------------------------------------------------------------------------
     def kinetic_energy(self) -> float:
-        return 0.5 * float(np.einsum("n,ni,ni->", self.m, self.state.v, self.state.v))
+        return (0.5 * float(np.einsum("n,ni,ni->", self.m, self.state.v, self.state.v))
+                + sum(imp.kinetic_energy() for imp in self.impactors))
+
+    def momentum(self) -> np.ndarray:
+        """(dim,) kg m/s of the FEM nodes and the impactors."""
+        return self.m @ self.state.v + sum((imp.momentum() for imp in self.impactors), np.zeros(self.region.dim))
 
     def energies(self) -> dict[str, float]:
         """The ledger with the current stored strain energy (J)."""
         L = self.ledger
         L.internal = self.region.strain_energy(getattr(self, "_u_at_forces", self.state.u))
         # coupling work is not external to a coupled system: the coupler accounts for it
-        return dict(kinetic=L.kinetic, internal=L.internal, external_work=L.external_work + L.support_work,
-                    dissipated=L.damping)
+        # contact: penalty energy is stored; what the contact forces took beyond it is
+        # dissipated (friction; a negative value means the contact created energy)
+        contact_loss = -self._contact_work - self._contact_energy
+        return dict(kinetic=L.kinetic, internal=L.internal + self._contact_energy,
+                    external_work=L.external_work + L.support_work, dissipated=L.damping + contact_loss)
 
     def _damping_force(self, v: np.ndarray) -> np.ndarray:
         f = 0.0
@@ -205,4 +254,6 @@ class ExplicitDynamics:
         hg = self.region.hourglass_viscous_force(v)
         if hg is not None:
             f = f + hg
+        if self.bulk_viscosity is not None:
+            f = f + self.bulk_viscosity.force(v)
         return np.zeros_like(v) + f
