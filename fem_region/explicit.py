@@ -170,6 +170,7 @@ class ExplicitDynamics:
         L.coupling_work += 0.5 * float(np.vdot(self._f_coupling_prev + self.f_coupling, du))
         self._f_coupling_prev = self.f_coupling.copy()
         s.a, s.f_ext = a, f_ext
+        self.f_int = f_int
         self._u_at_forces = s.u.copy()  # the ledger's time level: forces, work and kinetic at t_n
 
     def _contact(self, du: np.ndarray) -> np.ndarray:

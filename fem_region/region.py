@@ -14,6 +14,7 @@ import skfem
 
 from .elements import ElementType
 from .hourglass import HourglassControl
+from .kernels import VOIGT_2D, VOIGT_3D, total_lagrangian_force
 from .materials import voigt_blocks
 
 INTEGRATIONS = ("full", "selective", "reduced")
@@ -116,6 +117,8 @@ class FemRegion:
             self.hg = HourglassControl.build(self.X[self.mesh.t.T], one.dN[:, 0], one.dx[:, 0], self.D, self.rho,
                                              self.etype.element_cls().doflocs, self.hourglass, self.hourglass_kappa)
         self.ke = self._element_stiffness()
+        self._conn = np.ascontiguousarray(self.mesh.t.T)
+        self._D_rules = [np.ascontiguousarray(self._masked_D(q.voigt)) for q in self.rules]
         r = np.repeat(self._edofs, self._edofs.shape[1], axis=1).ravel()
         c = np.tile(self._edofs, (1, self._edofs.shape[1])).ravel()
         self.K = sp.csr_matrix((self.ke.ravel(), (r, c)), shape=(self.ndof, self.ndof))
@@ -193,13 +196,13 @@ class FemRegion:
         """u: (n_nodes, dim) m -> internal nodal force (n_nodes, dim) N."""
         if self.formulation == "linear":
             return (self.K @ u.ravel()).reshape(u.shape)
-        fe = 0.0
-        for q, F, S in self._green_lagrange(u):
-            P = F @ S  # first Piola-Kirchhoff, (nel, nqp, dim, dim)
-            fe = fe + np.einsum("eqij,eqaj,eq->eai", P, q.dN, q.dx)
+        f = np.zeros_like(u, dtype=float)
+        voigt = VOIGT_2D if self.dim == 2 else VOIGT_3D
+        for q, Dq in zip(self.rules, self._D_rules):
+            total_lagrangian_force(np.ascontiguousarray(u, dtype=float), self._conn, q.dN, q.dx, Dq, voigt, f)
         if self.hg is not None and self.hg.form == "stiffness":
-            fe = fe + self.hg.force(self.hg.k, u[self.mesh.t.T])
-        return self._scatter(fe, u.shape)
+            f += self._scatter(self.hg.force(self.hg.k, u[self.mesh.t.T]), u.shape)
+        return f
 
     def _scatter(self, fe: np.ndarray, shape) -> np.ndarray:
         """Element vectors (nel, n_loc, dim) -> assembled nodal array."""

@@ -34,3 +34,12 @@ def test_free_vibration_energy_drift(femdem):
     assert code == 0
     assert_checks(s)
     assert s["clock"]["steps"] == 10000
+
+
+@pytest.mark.parametrize("sets", [[], ["material.E=70e9", "material.rho=2700", "geometry.length=0.3"]])
+def test_column_buckling_euler(femdem, sets):
+    code, s, _ = femdem("run", "column_buckling", *sum((["--set", x] for x in sets), []))
+    assert code == 0
+    assert_checks(s)
+    # the column really buckled: lateral deflection far beyond the imperfection
+    assert s["qoi"]["max_mid_deflection"] > 20 * s["parameters"]["geometry.imperfection"] * s["parameters"]["geometry.thickness"]

@@ -1,0 +1,63 @@
+"""Per-step element loops compiled with numba (the Total Lagrangian internal force).
+
+numpy einsum on (nel, nqp, nloc, dim) arrays spends most of its time in temporaries; this
+loop visits each quadrature point once and accumulates nodal forces in place.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+VOIGT_2D = np.array([[0, 0], [1, 1], [0, 1]])
+VOIGT_3D = np.array([[0, 0], [1, 1], [2, 2], [1, 2], [0, 2], [0, 1]])
+
+
+@njit(cache=True)
+def total_lagrangian_force(u, conn, dN, dx, D, voigt, out):
+    """Add the St Venant-Kirchhoff internal force of one quadrature rule to ``out``.
+
+    u: (n, dim) m; conn: (nel, nloc) int; dN: (nel, nqp, nloc, dim) 1/m; dx: (nel, nqp) m^3;
+    D: (nel, ns, ns) Pa (already masked to this rule's Voigt components); voigt: (ns, 2) index
+    pairs; out: (n, dim) N, accumulated.
+    """
+    nel, nqp, nloc, dim = dN.shape
+    ns = voigt.shape[0]
+    H = np.empty((dim, dim))
+    E = np.empty(ns)
+    S = np.empty((dim, dim))
+    P = np.empty((dim, dim))
+    for e in range(nel):
+        for q in range(nqp):
+            for i in range(dim):
+                for j in range(dim):
+                    acc = 0.0
+                    for a in range(nloc):
+                        acc += u[conn[e, a], i] * dN[e, q, a, j]
+                    H[i, j] = acc
+            for s in range(ns):  # Green-Lagrange strain, engineering shear in Voigt form
+                i, j = voigt[s, 0], voigt[s, 1]
+                g = H[i, j] + H[j, i]
+                for k in range(dim):
+                    g += H[k, i] * H[k, j]
+                E[s] = 0.5 * g if i == j else g
+            for s in range(ns):
+                acc = 0.0
+                for t in range(ns):
+                    acc += D[e, s, t] * E[t]
+                i, j = voigt[s, 0], voigt[s, 1]
+                S[i, j] = acc
+                S[j, i] = acc
+            for i in range(dim):  # first Piola-Kirchhoff P = F S
+                for j in range(dim):
+                    acc = S[i, j]
+                    for k in range(dim):
+                        acc += H[i, k] * S[k, j]
+                    P[i, j] = acc
+            w = dx[e, q]
+            for a in range(nloc):
+                n = conn[e, a]
+                for i in range(dim):
+                    acc = 0.0
+                    for j in range(dim):
+                        acc += P[i, j] * dN[e, q, a, j]
+                    out[n, i] += acc * w
