@@ -113,3 +113,17 @@ def parse_layup(text: str) -> list[float]:
 def voigt_blocks(dim: int) -> tuple[list[int], list[int]]:
     """Indices of the normal and the shear components in the Voigt vector."""
     return ([0, 1], [2]) if dim == 2 else ([0, 1, 2], [3, 4, 5])
+
+
+def stress_3d(eps: np.ndarray, C: np.ndarray, dim: int, hypothesis: str = "plane_strain") -> np.ndarray:
+    """Full (m, 6) stress (Pa) from (m, 3) 2D or (m, 6) 3D Voigt strains and (m, 6, 6) global C."""
+    if dim == 3:
+        return np.einsum("mst,mt->ms", C, eps)
+    idx = [0, 1, 5]
+    if hypothesis == "plane_strain":
+        e6 = np.zeros(eps.shape[:-1] + (6,))
+        e6[..., idx] = eps
+        return np.einsum("mst,mt->ms", C, e6)
+    s6 = np.zeros(eps.shape[:-1] + (6,))
+    s6[..., idx] = np.einsum("mst,mt->ms", np.array([plane_stress(c) for c in C]), eps)
+    return s6

@@ -128,3 +128,48 @@ def test_hourglass_control_passes_patch_test(name, form):
     assert np.abs(r.internal_force(u)[interior]).max() < 1e-9 * np.abs(r.internal_force(u)).max()
     if form == "viscous":  # a uniform velocity gradient is not damped either
         assert np.abs(r.hourglass_viscous_force(u)).max() < 1e-9 * r.hg.c.max()
+
+
+def test_failure_indices_closed_forms():
+    from fem_region import failure
+    k = failure.HoffmanStrengths(2000e6, 1200e6, 50e6, 200e6, 50e6, 200e6, 60e6, 80e6, 80e6)
+    for comp, strengths in ((0, (k.Xt, -k.Xc)), (1, (k.Yt, -k.Yc)), (2, (k.Zt, -k.Zc))):
+        for s in strengths:
+            sig = np.zeros(6)
+            sig[comp] = s
+            assert failure.hoffman(sig, k) == pytest.approx(1.0)
+    for comp, s in ((3, k.S23), (4, k.S13), (5, k.S12)):
+        sig = np.zeros(6)
+        sig[comp] = s
+        assert failure.hoffman(sig, k) == pytest.approx(1.0)
+    # Hashin interlaminar: tension at Z0 or shear at R0 initiates; compression alone does not
+    assert failure.hashin_interlaminar(np.array([0, 0, 40e6, 0, 0, 0]), 40e6, 20e6) == pytest.approx(1.0)
+    assert failure.hashin_interlaminar(np.array([0, 0, -400e6, 0, 0, 0]), 40e6, 20e6) == 0.0
+    assert failure.hashin_interlaminar(np.array([0, 0, 0, 12e6, 16e6, 0]), 40e6, 20e6) == pytest.approx(1.0)
+    # rotating a uniaxial fibre stress into the axes of a 90 degree 2D ply puts it along 2
+    R = materials.ply_axes(90.0, 2)
+    sz = np.array([0, 0, 5.0, 0, 0, 0])  # global z = out of plane = fibre of a 90 ply in 2D
+    assert failure.to_ply_axes(sz, R)[0] == pytest.approx(5.0)
+
+
+def test_laminate_blocks_follow_layup():
+    from fem_region.laminate import Laminate, beam_mesh_2d
+    ply = materials.transversely_isotropic(156e9, 9.09e9, 0.228, 0.4, 6.9e9)
+    lam = Laminate.from_layup("[0_6/90_4/0_6]", 0.125e-3, ply)
+    m, plies = beam_mesh_2d(0.05, lam, 20, per_ply=2)
+    assert lam.thickness == pytest.approx(2e-3)
+    assert [i for i, _ in lam.interfaces()] == [5, 9]
+    assert np.bincount(plies).tolist() == [40] * 16
+    C = lam.global_C(plies, 2)
+    angles = np.array(lam.angles)[plies]
+    assert np.allclose(C[angles == 0][:, 0, 0], 156e9 * 0 + ply[0, 0])
+    assert np.allclose(C[angles == 90][:, 2, 2], ply[0, 0])  # 90 plies: fibres out of plane
+
+
+def test_stress_3d_plane_hypotheses():
+    C = materials.isotropic(100e9, 0.25)[None]
+    eps = np.array([[1e-3, 0.0, 0.0]])
+    s_strain = materials.stress_3d(eps, C, 2, "plane_strain")[0]
+    s_stress = materials.stress_3d(eps, C, 2, "plane_stress")[0]
+    assert s_strain[2] == pytest.approx(0.25 * s_strain[0] / 0.75)  # sigma_zz = nu (sxx + syy)
+    assert s_stress[2] == 0.0 and s_stress[0] == pytest.approx(100e9 / (1 - 0.25**2) * 1e-3)
