@@ -49,7 +49,7 @@ class RunOutput:
             if self._xdmf is None:
                 self._xdmf = meshio.xdmf.TimeSeriesWriter("fields.xdmf").__enter__()
                 self._xdmf.write_points_cells(f.points, f.cells)
-            self._xdmf.write_data(t, point_data=f.point_data)
+            self._xdmf.write_data(t, point_data=f.point_data, cell_data=f.cell_data)
 
     def finish(self, summary: dict, history: dict[str, np.ndarray]) -> Path:
         """Write history.h5 and summary.json, close the fields, publish the directory."""

@@ -32,11 +32,13 @@ class Stage:
 
 @dataclass
 class FieldFrame:
-    """Mesh and nodal data for one XDMF frame: points (n, 3) m, cells {type: (m, k)}, data."""
+    """Mesh and data for one XDMF frame: points (n, 3) m, cells {type: (m, k)}, nodal data,
+    and cell data {name: [array per cell block, in the order of ``cells``]}."""
 
     points: np.ndarray
     cells: dict[str, np.ndarray]
     point_data: dict[str, np.ndarray]
+    cell_data: dict[str, list[np.ndarray]] | None = None
 
 
 @dataclass

@@ -28,6 +28,12 @@ class PrescribedMotion:
     velocity: TimeFunction = staticmethod(lambda t: 0.0)
 
 
+def displacement_history(d: TimeFunction, h: float = 1e-9) -> TimeFunction:
+    """Prescribed displacement d(t) (m) as the velocity history a PrescribedMotion takes
+    (central difference over h seconds; d must be smooth on that scale)."""
+    return lambda t: (d(t + 0.5 * h) - d(t - 0.5 * h)) / h
+
+
 @dataclass
 class NodalLoad:
     """Force ``amplitude * curve(t)`` (N) on flat DOFs ``dofs``; amplitude: scalar or (len(dofs),)."""

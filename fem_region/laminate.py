@@ -59,3 +59,15 @@ def beam_mesh_2d(length: float, lam: Laminate, nx: int, per_ply: int = 1, elemen
     m = mesh.rectangle(xs, ys, element)
     centroid_y = m.p[1, m.t].mean(axis=0)
     return m, lam.ply_of(centroid_y)
+
+
+def plate_mesh_3d(lx: float, ly: float, lam: Laminate, nx: int, ny: int, per_ply: int = 1,
+                  element: str = "hex8", grade_ratio: float = 1.0, center: tuple[float, float] | None = None):
+    """Structured laminated plate [0, lx] x [0, ly] x [0, thickness], plies stacked along z,
+    graded in x and y towards ``center``; returns (mesh, ply (nel,))."""
+    cx, cy = center if center is not None else (None, None)
+    xs = mesh.graded(0.0, lx, nx, grade_ratio, cx)
+    ys = mesh.graded(0.0, ly, ny, grade_ratio, cy)
+    zs = np.linspace(0.0, lam.thickness, len(lam.angles) * per_ply + 1)
+    m = mesh.box(xs, ys, zs, element)
+    return m, lam.ply_of(m.p[2, m.t].mean(axis=0))

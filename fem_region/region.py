@@ -245,9 +245,10 @@ class FemRegion:
 
     def centroid_strain_stress(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Small-strain (nel, ns) strain and stress (Pa) at element centroids (Voigt)."""
-        q = _quadrature(self.mesh, self.etype, self.etype.one_point_rule(), 1.0, [])
-        B = strain_displacement(q.dN)[:, 0]
-        eps = np.einsum("esa,ea->es", B, u.ravel()[self._edofs])
+        if not hasattr(self, "_B1"):
+            q = _quadrature(self.mesh, self.etype, self.etype.one_point_rule(), 1.0, [])
+            self._B1 = strain_displacement(q.dN)[:, 0]
+        eps = np.einsum("esa,ea->es", self._B1, u.ravel()[self._edofs])
         return eps, np.einsum("est,et->es", self.D, eps)
 
     def nodes_where(self, predicate) -> np.ndarray:

@@ -132,3 +132,22 @@ def test_graded_coordinates():
     assert xs[0] == 0 and xs[-1] == 1 and len(xs) == 21
     assert h.min() == pytest.approx(h[9]) or h.min() == pytest.approx(h[10])
     assert h.max() / h.min() == pytest.approx(1.2**9, rel=1e-6)
+
+
+def test_prescribed_displacement_history_is_followed():
+    from fem_region.explicit import displacement_history
+    r = _block()
+    right = r.nodes_where(lambda x: x[0] > 0.1 - 1e-9)
+    d = lambda t: 1e-4 * np.sin(2e3 * t)  # midpoint-rule error ~ (omega dt)^2 / 24 per step
+    dyn = ExplicitDynamics(r, supports=[PrescribedMotion(right * 2, displacement_history(d))])
+    dt = _run(dyn, 300)
+    assert dyn.state.u[right, 0] == pytest.approx(np.full(len(right), d(300 * dt)), abs=1e-3 * 1e-4)
+
+
+def test_laminated_plate_mesh():
+    from fem_region.laminate import Laminate, plate_mesh_3d
+    lam = Laminate.from_layup("[0/90]s", 0.25e-3, materials.transversely_isotropic(140e9, 10e9, 0.3, 0.4, 5e9))
+    m, ply = plate_mesh_3d(0.1, 0.1, lam, 8, 8, per_ply=1, grade_ratio=1.3, center=(0.05, 0.05))
+    assert np.bincount(ply).tolist() == [64] * 4
+    C = lam.global_C(ply, 3)
+    assert np.allclose(C[ply == 1][:, 1, 1], C[ply == 0][:, 0, 0])  # 90 plies: fibres along y in 3D

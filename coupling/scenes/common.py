@@ -54,7 +54,9 @@ def fem_fields(dyn: ExplicitDynamics):
 
     def frame() -> FieldFrame:
         pad = lambda a: np.pad(a, ((0, 0), (0, 3 - a.shape[1])))
-        return FieldFrame(pts, {cell_type: mesh.t.T}, {"displacement": pad(dyn.state.u), "velocity": pad(dyn.state.v)})
+        _, stress = dyn.region.centroid_strain_stress(dyn.state.u)  # small-strain, Voigt, Pa
+        return FieldFrame(pts, {cell_type: mesh.t.T}, {"displacement": pad(dyn.state.u), "velocity": pad(dyn.state.v)},
+                          {"stress": [stress]})
 
     return frame
 
