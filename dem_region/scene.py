@@ -25,7 +25,8 @@ class DemScene:
     x: (n, 3) m; radius: (n,) m; density: (n,) kg/m^3; part: (n,) int (ply / part id);
     bonds: (nb, 2) particle index pairs; kn, ks: (nb,) N/m; bond_family: (nb,) int index into
     ``laws``; groups: name -> particle indices ("interface", "clamped", ...);
-    plane: True for quasi-2D scenes (motion out of the x-y plane and rotations about x, y blocked).
+    plane: True for quasi-2D scenes (motion out of the x-y plane and rotations about x, y blocked);
+    velocity: (n, 3) m/s initial velocities (zero if not given).
     """
 
     x: np.ndarray
@@ -42,9 +43,11 @@ class DemScene:
     young: float = 1e9  # contact modulus for unbonded touching particles (Pa)
     poisson: float = 0.3
     friction_deg: float = 0.0
+    velocity: np.ndarray | None = None
 
     def __post_init__(self):
         n = len(self.x)
+        self.velocity = np.zeros((n, 3)) if self.velocity is None else np.asarray(self.velocity, float).reshape(n, 3)
         self.x = np.asarray(self.x, float).reshape(n, 3)
         self.radius = np.broadcast_to(np.asarray(self.radius, float), (n,)).copy()
         self.density = np.broadcast_to(np.asarray(self.density, float), (n,)).copy()
@@ -68,6 +71,11 @@ class DemScene:
     def mass(self) -> np.ndarray:
         """(n,) kg of solid spheres."""
         return self.density * 4.0 / 3.0 * np.pi * self.radius**3
+
+    @property
+    def inertia(self) -> np.ndarray:
+        """(n,) kg m^2, moment of inertia of solid spheres."""
+        return 0.4 * self.mass * self.radius**2
 
     def critical_dt(self, free: np.ndarray | None = None) -> float:
         """Central-difference stable step (s) of the bonded network, by Gershgorin's bound.

@@ -105,7 +105,7 @@ class ExplicitDynamics:
         self.ledger = EnergyLedger()
         self._prescribed = np.unique(np.concatenate([s.dofs for s in self.supports])) if self.supports else np.zeros(0, int)
         self._f_coupling_prev = zero.copy()
-        self._du, self._dt = zero.copy(), 0.0
+        self._u_at_forces, self._t_at_forces, self._dt = zero.copy(), 0.0, 0.0
         self._surface = r.mesh.boundary_nodes() if self.impactors else np.zeros(0, int)
         self._contact_prev = [(np.zeros((len(self._surface), r.dim)), np.zeros(r.dim)) for _ in self.impactors]
         self._contact_work = 0.0  # net work of the contact forces on both bodies (J)
@@ -136,22 +136,29 @@ class ExplicitDynamics:
         return f.reshape(-1, self.region.dim)
 
     # -- the phases of one step ----------------------------------------------------------------
-    def kick_drift(self, dt: float) -> None:
-        s = self.state
-        s.v += 0.5 * dt * s.a
+    def half_kick(self, dt: float) -> None:
+        """v += dt/2 a (nodes and impactors)."""
+        self.state.v += 0.5 * dt * self.state.a
         for imp in self.impactors:
             imp.v += 0.5 * dt * imp.a
-            imp.dx = dt * imp.v
-            imp.x += imp.dx
+
+    def drift(self, dt: float) -> None:
+        """u += dt v with the prescribed velocities at the mid-point of the drift; t += dt."""
+        s = self.state
+        for imp in self.impactors:
+            imp.x += dt * imp.v
         vflat = s.v.reshape(-1)
         t_half = s.t + 0.5 * dt
         for sup in self.supports:
             vflat[sup.dofs] = sup.velocity(t_half)
-        self._du = dt * s.v
-        self._dt = dt
-        s.u += self._du
+        s.u += dt * s.v
         s.t += dt
-        s.step += 1
+
+    def kick_drift(self, dt: float) -> None:
+        """v_{n+1/2} = v_n + dt/2 a_n, then u_{n+1} = u_n + dt v_{n+1/2}."""
+        self.half_kick(dt)
+        self.drift(dt)
+        self.state.step += 1
 
     def compute_forces(self) -> None:
         """Forces at the new configuration; a = f / m except on prescribed DOFs."""
@@ -159,7 +166,8 @@ class ExplicitDynamics:
         f_ext = self.external_force(s.t)
         f_int = self.region.internal_force(s.u)
         f_damp = self._damping_force(s.v)
-        du = self._du
+        du = s.u - self._u_at_forces  # motion since the last force evaluation
+        self._dt = s.t - self._t_at_forces
         L.external_work += 0.5 * float(np.vdot(s.f_ext + f_ext, du))
         L.damping += float(np.vdot(f_damp, du))
         f = f_ext - f_int - f_damp + self.f_coupling
@@ -177,7 +185,7 @@ class ExplicitDynamics:
         self._f_coupling_prev = self.f_coupling.copy()
         s.a, s.f_ext = a, f_ext
         self.f_int = f_int
-        self._u_at_forces = s.u.copy()  # the ledger's time level: forces, work and kinetic at t_n
+        self._u_at_forces, self._t_at_forces = s.u.copy(), s.t  # the ledger's time level
 
     def _contact(self, du: np.ndarray) -> np.ndarray:
         """Penalty contact forces on the surface nodes; impactor accelerations; contact ledger."""
@@ -188,7 +196,8 @@ class ExplicitDynamics:
             fc, energy = imp.forces(r.X[S] + self.state.u[S], self.state.v[S])
             F = -fc.sum(axis=0)
             fc_prev, F_prev = self._contact_prev[k]
-            self._contact_work += 0.5 * float(np.vdot(fc_prev + fc, du[S]) + (F_prev + F) @ imp.dx)
+            dx, imp.x_at_forces = imp.x - imp.x_at_forces, imp.x.copy()
+            self._contact_work += 0.5 * float(np.vdot(fc_prev + fc, du[S]) + (F_prev + F) @ dx)
             self._contact_prev[k] = (fc, F)
             imp.a = F / imp.mass
             f[S] += fc
@@ -205,10 +214,9 @@ class ExplicitDynamics:
         return a[self._prescribed]
 
     def kick(self, dt: float) -> None:
+        """v_{n+1} = v_{n+1/2} + dt/2 a_{n+1}; kinetic-energy ledger; dynamic relaxation."""
         s = self.state
-        s.v += 0.5 * dt * s.a
-        for imp in self.impactors:
-            imp.v += 0.5 * dt * imp.a
+        self.half_kick(dt)
         if self._prescribed.size:
             vflat = s.v.reshape(-1)
             for sup in self.supports:
@@ -228,7 +236,6 @@ class ExplicitDynamics:
 
     def start(self) -> None:
         """Accelerations at t = 0 from the initial state (call once before stepping)."""
-        self._du = np.zeros_like(self.state.u)
         self.compute_forces()
         self.ledger = EnergyLedger(kinetic=self.kinetic_energy())
 

@@ -36,7 +36,7 @@ class RigidImpactor:
     x: np.ndarray = field(init=False)
     v: np.ndarray = field(init=False)
     a: np.ndarray = field(init=False)
-    dx: np.ndarray = field(init=False)  # displacement over the last step (for the work ledger)
+    x_at_forces: np.ndarray = field(init=False)  # position at the last force evaluation (work ledger)
 
     def __post_init__(self):
         if self.shape not in SHAPES:
@@ -44,7 +44,7 @@ class RigidImpactor:
         self.x = np.array(self.center, float)
         self.v = np.array(self.velocity, float)
         self.a = np.zeros_like(self.x)
-        self.dx = np.zeros_like(self.x)
+        self.x_at_forces = self.x.copy()
         if self.shape in ("flat_punch", "rod"):
             ax = np.asarray(self.axis if self.axis is not None else -self.v, float)
             self.axis = ax / np.linalg.norm(ax)

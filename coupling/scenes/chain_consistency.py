@@ -77,7 +77,7 @@ def build(p: dict, mode: str, dem: str):
                           for xx in le * np.arange(nf + 1)])
     probes = {}
     for j, a in enumerate(fem_nodes):
-        probes[f"u_fem_{j}"] = lambda a=a: float(coupler.fem.state.u[a, 0])
+        probes[f"u_fem_{j}"] = lambda a=a: float(coupler.u_snapshot[a, 0])
     for j in free:
         probes[f"u_dem_{j}"] = lambda j=j: float(coupler.dem.positions()[j, 0] - xp0[j])
     sim.probes.update(probes)

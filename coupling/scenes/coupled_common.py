@@ -17,11 +17,10 @@ from .common import n_steps, time_step
 
 
 def coupled_simulation(p: dict, make_fem: Callable[[np.ndarray], ExplicitDynamics], scene: DemScene,
-                       dem: str, t_end_default: float, history_every: int = 0):
+                       dem: str, t_end_default: float, history_every: int = 0, steps: int = 0):
     """(Simulation, KinematicTie) for a FEM far field made by ``make_fem(extra_mass)`` and a
-    DEM ``scene`` whose group "interface" is slaved to the FEM."""
-    if p["clock.substeps"] > 1:
-        raise CaseError(f"clock.substeps = {p['clock.substeps']}: subcycling is not implemented yet; allowed 0 or 1")
+    DEM ``scene`` whose group "interface" is slaved to the FEM. steps: FEM steps (default
+    from t_end); history_every: FEM steps between samples (default from output.history_every)."""
     try:
         backend = get_backend(dem)()
     except EngineUnavailable as exc:
@@ -34,8 +33,16 @@ def coupled_simulation(p: dict, make_fem: Callable[[np.ndarray], ExplicitDynamic
     fem = make_fem(itf.share_mass(scene.mass[itf.ids]))
     backend.build(scene)
     dt_fem, dt_dem = fem.critical_dt(), backend.critical_dt()
-    n, dt = n_steps(p, t_end_default, time_step(p, min(dt_fem, dt_dem)))
-    tie = KinematicTie(fem, backend, itf, dt)
+    m = p["clock.substeps"] or max(1, int(np.floor(dt_fem / dt_dem)))  # 0: as many as the FEM step allows
+    n, dt = n_steps(p, t_end_default, time_step(p, min(dt_fem, m * dt_dem)))
+    if steps:
+        n, dt = steps, time_step(p, min(dt_fem, m * dt_dem))
+    if dt / m > dt_dem:
+        raise CaseError(f"clock.dt = {p['clock.dt']:g}: the DEM substep dt/{m} is above the DEM stable step "
+                        f"{dt_dem:.4g} s; allowed <= {m * dt_dem:.4g} s")
+    tie = KinematicTie(fem, backend, itf, dt, m)
+    every = history_every or p["output.history_every"] or max(1, n // 1000)
+    tie.snapshot_every, tie.last_window = every, n
     region = fem.region
     pts0 = np.vstack([np.pad(region.X, ((0, 0), (0, 3 - region.dim))), scene.x])
     cell = {"quad4": "quad", "tri3": "triangle", "hex8": "hexahedron", "tet4": "tetra"}[region.etype.name]
@@ -48,11 +55,11 @@ def coupled_simulation(p: dict, make_fem: Callable[[np.ndarray], ExplicitDynamic
 
     sim = Simulation(
         stages=tie.stages(), dt=dt, n_steps=n,
-        history_every=history_every or p["output.history_every"] or max(1, n // 1000),
+        history_every=every,
         probes={}, energies=tie.energies,
         counts={"fem_nodes": region.n_nodes, "fem_elements": region.n_elements, "particles": scene.n,
                 "bonds": len(scene.bonds), "interface_particles": len(itf.ids)},
-        clock_info={"dt_fem": dt, "dt_dem": dt, "dt_stable_fem": dt_fem, "dt_stable_dem": dt_dem, "substeps": 1},
+        clock_info={"dt_fem": dt, "dt_dem": dt / m, "dt_stable_fem": dt_fem, "dt_stable_dem": dt_dem, "substeps": m},
         fields=fields, field_frames=p["output.field_frames"], energy_growth_tol=p["guards.energy_growth"],
         close=backend.finalize, versions={dem: backend.version}, timing_correction=tie.timing_correction)
     return sim, tie

@@ -1,9 +1,11 @@
 """The back-end contract: one small class shaped like a coupling participant (preCICE style).
 
-Order of calls: ``build(scene)`` once; ``set_dt``; then per step ``advance(between)``, which
-(1) makes the forces at the current positions available, (2) calls ``between()``, where the
-orchestrator reads interface forces and writes interface velocities, (3) moves every particle
-to the next step (leapfrog; interface particles follow the velocity written in (2)).
+Order of calls: ``build(scene)`` once; ``set_dt``; ``start(between)`` once (forces at x_0,
+then ``between()``); then per step ``advance(between)``, which (1) moves every particle with
+the forces of the current positions (leapfrog: v_{k+1/2} = v_{k-1/2} + dt F_k / m,
+x_{k+1} = x_k + dt v_{k+1/2}; prescribed particles keep the velocity last written),
+(2) computes the forces at x_{k+1}, (3) calls ``between()``, where the orchestrator reads
+interface forces and writes the interface velocities of the next move.
 Array data moves in bulk: ids (k,) int, vectors (k, 3) SI.
 """
 from __future__ import annotations
@@ -29,6 +31,8 @@ class DemBackend(Protocol):
     def critical_dt(self) -> float: ...
 
     def set_dt(self, dt: float) -> None: ...
+
+    def start(self, between: Callable[[], None] | None = None) -> None: ...
 
     def advance(self, between: Callable[[], None] | None = None) -> None: ...
 

@@ -3,9 +3,10 @@
 Bonds become CohFrictPhys interactions created explicitly from the neutral bond list
 (``utils.createInteraction``), with their stiffnesses set per bond and their rest gap taken
 from the initial configuration (``unp``), so the engine integrates exactly the neutral
-scene. The coupling hook is a PyRunner placed between the InteractionLoop and the
-NewtonIntegrator: forces at x_n are known there and the particles have not moved yet, so
-one ``O.step()`` is one monolithic central-difference step of the coupled system.
+scene. The engine list runs the NewtonIntegrator first and the coupling hook (a PyRunner)
+last: one ``O.step()`` moves the particles with the forces of x_k, computes the forces at
+x_{k+1} and hands over to the orchestrator, which sets the interface velocities for the next
+move. (Newton's "forces last reset" warning that this order triggers is silenced.)
 """
 from __future__ import annotations
 
@@ -59,13 +60,18 @@ class YadeBackend:
         V3 = self.yade.Vector3
         self.ids = O.bodies.append([utils.sphere(V3(*x), float(r), material=mat)
                                     for x, r in zip(scene.x, scene.radius)])
-        for b, rho in zip(O.bodies, scene.density):  # per-particle density
-            b.state.mass = float(rho * 4.0 / 3.0 * np.pi * b.shape.radius**3)
+        for b, m, I, v in zip(O.bodies, scene.mass, scene.inertia, scene.velocity):
+            b.state.mass = float(m)  # per-particle density
+            b.state.inertia = V3(I, I, I)
+            b.state.vel = V3(*v)
             if scene.plane:
                 b.state.blockedDOFs = "zXY"
         self.law = w.Law2_ScGeom6D_CohFrictPhys_CohesionMoment()
         setattr(__main__, _HOOK, self._hook)
+        import yade.log
+        yade.log.setLevel("NewtonIntegrator", yade.log.ERROR)
         O.engines = [
+            w.NewtonIntegrator(damping=0.0),
             w.ForceResetter(),
             w.InsertionSortCollider([w.Bo1_Sphere_Aabb()]),
             w.InteractionLoop([w.Ig2_Sphere_Sphere_ScGeom6D()],
@@ -73,7 +79,6 @@ class YadeBackend:
                                                                           setCohesionOnNewContacts=False)],
                               [self.law]),
             w.PyRunner(command=f"{_HOOK}()", iterPeriod=1, initRun=True),
-            w.NewtonIntegrator(damping=0.0),
         ]
         for (i, j), kn, ks in zip(scene.bonds, scene.kn, scene.ks):
             I = utils.createInteraction(int(i), int(j))
@@ -94,6 +99,11 @@ class YadeBackend:
     def _hook(self) -> None:
         if self._between is not None:
             self._between()
+
+    def start(self, between: Callable[[], None] | None = None) -> None:
+        dt, self.O.dt = self.O.dt, 0.0  # a step of zero length: forces at x_0, then the hook
+        self.advance(between)
+        self.O.dt = dt
 
     def advance(self, between: Callable[[], None] | None = None) -> None:
         self._between = between
@@ -123,15 +133,27 @@ class YadeBackend:
     def energies(self) -> dict[str, float]:
         """Kinetic energy of the free particles (prescribed ones belong to the FEM side) and
         elastic bond energy, J, both at the time level of the last force evaluation: YADE's
-        leapfrog velocities are half a step ahead, so v_n = v_{n+1/2} - dt/2 F_n / m."""
+        leapfrog velocities lag half a step, so v_k = v_{k-1/2} + dt/2 F_k / m."""
         m = self.scene.mass.copy()
         v = self.velocities()
         if self.O.iter > 0:
-            v -= 0.5 * self.O.dt * self.forces(np.arange(self.scene.n)) / m[:, None]
+            v += 0.5 * self.O.dt * self.forces(np.arange(self.scene.n)) / m[:, None]
         m[self.prescribed] = 0.0
-        # the law's energy functions crash YADE before its first step; bonds are built stress free
-        elastic = self.law.normElastEnergy() + self.law.shearElastEnergy() if self.O.iter > 0 else 0.0
-        return {"kinetic": 0.5 * float(np.einsum("n,ni,ni->", m, v, v)), "elastic": float(elastic),
+        I = self.scene.inertia.copy()
+        I[self.prescribed] = 0.0
+        w = np.array([tuple(b.state.angVel) for b in self.O.bodies])
+        # the law's energy functions crash YADE before its first force evaluation (bonds are
+        # built stress free); its shear energy divides by ks: bonds with ks = 0 are left out
+        elastic = 0.0
+        if self.O.iter > 0:
+            elastic = self.law.normElastEnergy()
+            if self.scene.ks.min() > 0:
+                elastic += self.law.shearElastEnergy()
+            elif self.scene.ks.max() > 0:
+                elastic += sum(0.5 * i.phys.shearForce.squaredNorm() / i.phys.ks
+                               for i in self.O.interactions if i.isReal and i.phys.ks > 0)
+        kinetic = 0.5 * float(np.einsum("n,ni,ni->", m, v, v) + np.einsum("n,ni,ni->", I, w, w))
+        return {"kinetic": kinetic, "elastic": float(elastic),
                 "dissipated": 0.0}
 
     def finalize(self) -> None:
