@@ -1,6 +1,7 @@
 """The ``femdem`` command line (contract in shared/design/ARCHITECTURE.md).
 
-Exit codes: 0 ok; 2 bad input (one line: key, value, what is allowed); 3 run stopped on a
+Exit codes: 0 ok; 1 the run failed with an error (engine failure or defect; the message is
+in summary.json); 2 bad input (one line: key, value, what is allowed); 3 run stopped on a
 detected instability.
 """
 from __future__ import annotations

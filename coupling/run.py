@@ -29,10 +29,10 @@ def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool) -> t
     except FileExistsError:
         raise CaseError(f"--out {out}: directory exists and is not empty; allowed: a new or empty directory") from None
     t_start = time.perf_counter()
-    sim = None
+    sim, result, qoi, checks = None, None, {}, {}
+    status, message = "ok", ""
     try:
         sim = scene.build(case.parameters, mode, dem)
-        status, message, result = "ok", "", None
         bar = _progress(sim, quiet)
         try:
             result = run_clock(sim, on_sample=bar.update if bar else None, on_frame=writer.frame)
@@ -41,7 +41,6 @@ def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool) -> t
         finally:
             if bar:
                 bar.close()
-        qoi, checks = {}, {}
         if status == "ok":
             qoi, checks = scene.evaluate(case.parameters, result["history"])
             t0 = time.perf_counter()
@@ -50,22 +49,24 @@ def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool) -> t
     except CaseError:
         writer_cleanup(writer)
         raise
+    except Exception as exc:  # a defect or an engine failure: say so in the run directory too
+        status, message = "error", f"{type(exc).__name__}: {exc}"
     finally:
         if sim is not None:
             sim.close()
-    timing = dict(result["timing_s"], total=time.perf_counter() - t_start)
+    result = result or {"history": {}, "timing_s": {}, "energy": {}, "steps": 0}
     summary = {
         "case": case.name, "case_file": str(case.path), "scene": scene.NAME, "mode": mode,
         "dem_backend": dem if mode != "fem" else None,
-        "versions": {"python": platform.python_version(), **_versions(), **sim.versions},
-        "parameters": case.parameters, "counts": sim.counts,
-        "clock": {**sim.clock_info, "steps": result["steps"], "t_end": result["steps"] * sim.dt},
-        "timing_s": timing, "energy": result["energy"], "qoi": qoi, "checks": checks,
-        "status": status, "message": message,
+        "versions": {"python": platform.python_version(), **_versions(), **(sim.versions if sim else {})},
+        "parameters": case.parameters, "counts": sim.counts if sim else {},
+        "clock": {**(sim.clock_info if sim else {}), "steps": result["steps"],
+                  "t_end": result["steps"] * sim.dt if sim else 0.0},
+        "timing_s": dict(result["timing_s"], total=time.perf_counter() - t_start),
+        "energy": result["energy"], "qoi": qoi, "checks": checks, "status": status, "message": message,
     }
     final = writer.finish(summary, result["history"])
-    code = 0 if status == "ok" else 3
-    return code, final, summary
+    return {"ok": 0, "unstable": 3, "error": 1}[status], final, summary
 
 
 def writer_cleanup(writer: RunOutput) -> None:

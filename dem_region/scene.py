@@ -67,6 +67,29 @@ class DemScene:
     def n(self) -> int:
         return len(self.x)
 
+    def to_wire(self) -> dict:
+        """Plain-Python form (arrays as dtype, shape, bytes) for another process, which may run
+        a different numpy (the LAMMPS worker venv)."""
+        out = {}
+        for k, v in self.__dict__.items():
+            if isinstance(v, np.ndarray):
+                out[k] = ("ndarray", v.dtype.str, v.shape, v.tobytes())
+            elif k == "groups":
+                out[k] = {g: ("ndarray", a.dtype.str, a.shape, a.tobytes()) for g, a in v.items()}
+            elif k == "laws":
+                out[k] = [type(law).__name__ for law in v]
+            else:
+                out[k] = v
+        return out
+
+    @classmethod
+    def from_wire(cls, d: dict) -> "DemScene":
+        arr = lambda t: np.frombuffer(t[3], dtype=np.dtype(t[1])).reshape(t[2]).copy()
+        kw = {k: (arr(v) if isinstance(v, tuple) and v and v[0] == "ndarray" else v) for k, v in d.items()}
+        kw["groups"] = {g: arr(t) for g, t in d["groups"].items()}
+        kw["laws"] = [ElasticBond() for _ in d["laws"]]
+        return cls(**kw)
+
     @property
     def mass(self) -> np.ndarray:
         """(n,) kg of solid spheres."""

@@ -87,3 +87,24 @@ def test_subcycled_coupling_is_stable_and_conserves_momentum(femdem, m):
     assert s["clock"]["substeps"] == m and s["clock"]["dt_dem"] == pytest.approx(s["clock"]["dt_fem"] / m)
     assert s["qoi"]["momentum_drift_rel"] < 1e-11
     assert s["energy"]["balance_error_rel"] < 0.01
+
+
+def test_worker_process_gives_the_same_numbers(femdem, tmp_path):
+    """The same case with the engine in a worker process (shared memory + socket) reproduces
+    the in-process run bit for bit, and leaves no process or shared-memory block behind."""
+    import glob
+    import subprocess
+    import h5py
+    shm_before = set(glob.glob("/dev/shm/*"))
+    code_a, a, _ = femdem("run", "chain_consistency")
+    code_b, b, _ = femdem("run", "chain_consistency", "--set", "dem.process=worker")
+    assert code_a == code_b == 0 and b["parameters"]["dem.process"] == "worker"
+    assert a["qoi"] == b["qoi"]
+    ha = h5py.File(tmp_path / "run0" / "history.h5")["history"]
+    hb = h5py.File(tmp_path / "run1" / "history.h5")["history"]
+    for k in ha:
+        if k.startswith("u_"):
+            assert np.array_equal(ha[k][:], hb[k][:]), k
+    assert set(glob.glob("/dev/shm/*")) <= shm_before
+    ps = subprocess.run(["pgrep", "-f", "dem_region.worker"], capture_output=True, text=True)
+    assert ps.stdout.strip() == ""

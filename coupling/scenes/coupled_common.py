@@ -5,7 +5,7 @@ from typing import Callable
 
 import numpy as np
 
-from dem_region.backends import EngineUnavailable, get_backend
+from dem_region.backends import EngineUnavailable, make_backend
 from dem_region.scene import DemScene
 from fem_region.explicit import ExplicitDynamics
 from interfaces.transition import InterfaceError, TransitionInterface
@@ -22,7 +22,7 @@ def coupled_simulation(p: dict, make_fem: Callable[[np.ndarray], ExplicitDynamic
     DEM ``scene`` whose group "interface" is slaved to the FEM. steps: FEM steps (default
     from t_end); history_every: FEM steps between samples (default from output.history_every)."""
     try:
-        backend = get_backend(dem)()
+        backend = make_backend(dem, p["dem.process"])
     except EngineUnavailable as exc:
         raise CaseError(str(exc)) from None
     probe_fem = make_fem(None)
@@ -31,6 +31,14 @@ def coupled_simulation(p: dict, make_fem: Callable[[np.ndarray], ExplicitDynamic
     except InterfaceError as exc:
         raise CaseError(f"interface: {exc}") from None
     fem = make_fem(itf.share_mass(scene.mass[itf.ids]))
+    try:
+        return _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, steps)
+    except BaseException:
+        backend.finalize()  # never leave an engine (or its worker process) behind
+        raise
+
+
+def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, steps):
     backend.build(scene)
     dt_fem, dt_dem = fem.critical_dt(), backend.critical_dt()
     m = p["clock.substeps"] or max(1, int(np.floor(dt_fem / dt_dem)))  # 0: as many as the FEM step allows

@@ -15,6 +15,7 @@ _REGISTRY = {
     "lammps": (None, None, "not implemented yet (issue #8)"),
 }
 NAMES = tuple(_REGISTRY)
+PROCESSES = ("auto", "in-process", "worker")
 
 
 def get_backend(name: str) -> type[DemBackend]:
@@ -28,3 +29,12 @@ def get_backend(name: str) -> type[DemBackend]:
         return getattr(importlib.import_module(module), cls)
     except ImportError as exc:
         raise EngineUnavailable(f"--dem {name}: engine does not load ({exc}); fix: {fix}") from None
+
+
+def make_backend(name: str, process: str = "auto") -> DemBackend:
+    """An engine instance, in this process or in a worker process (same contract)."""
+    cls = get_backend(name)  # validates the name and that the engine loads here
+    if process in ("auto", "in-process"):
+        return cls()
+    from .remote import RemoteBackend
+    return RemoteBackend(name)

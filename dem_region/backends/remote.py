@@ -1,0 +1,126 @@
+"""A DEM back-end that runs in a worker process (shared memory for arrays, a socket for control).
+
+Same contract as the in-process adapters, so the orchestrator cannot tell the difference and
+the same case gives the same numbers either way. Needed by LAMMPS, whose MPICH cannot share
+a process with the OpenMPI of YADE, LIGGGHTS and mpi4py (ENGINES.md).
+"""
+from __future__ import annotations
+
+import os
+import socket
+import subprocess
+import sys
+from multiprocessing import shared_memory
+from multiprocessing.connection import Connection
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from ..scene import DemScene
+from .base import EngineUnavailable
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+class RemoteBackend:
+    """Proxy for engine ``engine`` running under ``python`` (with ``env``) in a child process."""
+
+    native_laws = ("elastic",)
+
+    def __init__(self, engine: str, python: str | None = None, env: dict | None = None):
+        self.name = engine
+        parent, child = socket.socketpair()
+        env = dict(env if env is not None else os.environ)
+        env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
+        self.proc = subprocess.Popen([python or sys.executable, "-m", "dem_region.worker", str(child.fileno()), engine],
+                                     pass_fds=(child.fileno(),), env=env, cwd=str(ROOT))
+        child.close()
+        self.conn = Connection(parent.detach())
+        self.blocks: list[shared_memory.SharedMemory] = []
+        self.ids = np.zeros(0, int)
+        self.prescribed = self.ids
+
+    def _call(self, *msg):
+        self.conn.send(msg)
+        try:
+            reply = self.conn.recv()
+        except EOFError:
+            raise EngineUnavailable(f"--dem {self.name}: the engine worker died (exit code {self.proc.poll()})") from None
+        if reply[0] == "error":
+            raise RuntimeError(f"{self.name} worker: {reply[1]}")
+        return reply
+
+    def build(self, scene: DemScene) -> None:
+        self.scene = scene
+        _, self.version, self._dt_crit = self._call("build", scene.to_wire())
+
+    def critical_dt(self) -> float:
+        return self._dt_crit
+
+    def set_dt(self, dt: float) -> None:
+        self._call("set_dt", float(dt))
+
+    def prescribe(self, ids: np.ndarray) -> None:
+        self.ids = self.prescribed = np.asarray(ids, int)
+        nbytes = max(8, 8 * 3 * len(self.ids))
+        self.blocks = [shared_memory.SharedMemory(create=True, size=nbytes) for _ in range(2)]
+        self.F, self.V = (np.ndarray((len(self.ids), 3), dtype=np.float64, buffer=b.buf) for b in self.blocks)
+        self._call("prescribe", self.ids.tolist(), self.blocks[0].name, self.blocks[1].name)
+
+    def _run(self, op: str, between: Callable[[], None] | None, n: int = 1) -> None:
+        self.conn.send((op, n))
+        while True:
+            try:
+                msg = self.conn.recv()
+            except EOFError:
+                raise EngineUnavailable(f"--dem {self.name}: the engine worker died (exit code {self.proc.poll()})") from None
+            if msg[0] == "hook":
+                if between is not None:
+                    between()
+                self.conn.send(("go",))
+            elif msg[0] == "done":
+                return
+            else:
+                raise RuntimeError(f"{self.name} worker: {msg}")
+
+    def start(self, between: Callable[[], None] | None = None) -> None:
+        self._run("start", between)
+
+    def advance(self, between: Callable[[], None] | None = None) -> None:
+        self._run("advance", between)
+
+    def forces(self, ids: np.ndarray) -> np.ndarray:
+        if ids is self.ids or (len(ids) == len(self.ids) and np.array_equal(ids, self.ids)):
+            return self.F.copy()  # written by the worker in its hook
+        return np.asarray(self._call("call", "forces", np.asarray(ids).tolist())[1])
+
+    def set_velocities(self, ids: np.ndarray, v: np.ndarray) -> None:
+        if not np.array_equal(ids, self.ids):
+            raise ValueError("remote engines take velocities only for the prescribed interface set")
+        self.V[:] = v
+
+    def positions(self) -> np.ndarray:
+        return np.asarray(self._call("call", "positions")[1])
+
+    def velocities(self) -> np.ndarray:
+        return np.asarray(self._call("call", "velocities")[1])
+
+    def energies(self) -> dict[str, float]:
+        return self._call("call", "energies")[1]
+
+    def finalize(self) -> None:
+        if self.proc.poll() is None:
+            try:
+                self._call("finalize")
+            except (EngineUnavailable, RuntimeError, OSError):
+                pass
+        self.conn.close()
+        try:
+            self.proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+        for b in self.blocks:
+            b.close()
+            b.unlink()
+        self.blocks = []

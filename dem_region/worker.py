@@ -1,0 +1,96 @@
+"""A DEM engine in its own process: the far end of ``backends.remote.RemoteBackend``.
+
+Started as ``python -m dem_region.worker FD ENGINE``, FD a connected socket. Control
+messages are small pickled tuples over the socket; the interface arrays (forces out,
+velocities in) live in shared memory blocks the orchestrator created. The worker exits when
+told, or when the socket closes (the orchestrator died), so no engine process outlives it.
+"""
+from __future__ import annotations
+
+import socket
+import sys
+from multiprocessing import resource_tracker, shared_memory
+from multiprocessing.connection import Connection
+
+import numpy as np
+
+
+def _attach(name: str, shape) -> tuple[shared_memory.SharedMemory, np.ndarray]:
+    shm = shared_memory.SharedMemory(name=name)
+    # Python < 3.13 registers attached blocks too and would unlink the parent's block at exit
+    resource_tracker.unregister(shm._name, "shared_memory")  # noqa: SLF001
+    return shm, np.ndarray(shape, dtype=np.float64, buffer=shm.buf)
+
+
+def serve(conn: Connection, engine: str) -> None:
+    from dem_region.backends import get_backend
+    from dem_region.scene import DemScene
+
+    backend = get_backend(engine)()
+    state = {"ids": np.zeros(0, int), "F": None, "V": None, "blocks": []}
+
+    def between():
+        """The engine's coupling hook: forces out, then serve queries until 'go'."""
+        state["F"][:] = backend.forces(state["ids"])
+        conn.send(("hook",))
+        while True:
+            msg = conn.recv()
+            if msg[0] == "go":
+                break
+            handle(msg)
+        backend.set_velocities(state["ids"], state["V"])
+
+    def handle(msg) -> bool:
+        """Run one control message; False when the worker should stop."""
+        op, args = msg[0], msg[1:]
+        try:
+            if op == "build":
+                backend.build(DemScene.from_wire(args[0]))
+                conn.send(("ok", backend.version, backend.critical_dt()))
+            elif op == "prescribe":
+                ids = state["ids"] = np.asarray(args[0], int)
+                backend.prescribe(ids)
+                (sf, state["F"]), (sv, state["V"]) = _attach(args[1], (len(ids), 3)), _attach(args[2], (len(ids), 3))
+                state["blocks"] += [sf, sv]
+                conn.send(("ok",))
+            elif op == "set_dt":
+                backend.set_dt(args[0])
+                conn.send(("ok",))
+            elif op in ("start", "advance"):
+                hook = between if len(state["ids"]) else None
+                for _ in range(args[0] if op == "advance" else 1):
+                    getattr(backend, op)(hook)
+                conn.send(("done",))
+            elif op == "call":  # bulk queries: positions, velocities, energies, forces(ids)
+                out = getattr(backend, args[0])(*args[1:])
+                # plain lists: the two processes may run different numpy versions
+                conn.send(("ok", out.tolist() if isinstance(out, np.ndarray) else out))
+            elif op == "finalize":
+                backend.finalize()
+                conn.send(("ok",))
+                return False
+            else:
+                conn.send(("error", f"unknown operation {op!r}"))
+        except (EOFError, OSError):
+            raise
+        except Exception as exc:  # report, then keep serving so the orchestrator can stop cleanly
+            conn.send(("error", f"{type(exc).__name__}: {exc}"))
+        return True
+
+    try:
+        while handle(conn.recv()):
+            pass
+    except (EOFError, OSError):
+        pass  # the orchestrator is gone: stop
+    for b in state["blocks"]:
+        b.close()
+
+
+def main() -> None:
+    fd, engine = int(sys.argv[1]), sys.argv[2]
+    sock = socket.socket(fileno=fd)
+    serve(Connection(sock.detach()), engine)
+
+
+if __name__ == "__main__":
+    main()
