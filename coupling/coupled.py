@@ -58,7 +58,7 @@ class KinematicTie:
         clock = time.perf_counter
         fem, itf = self.fem, self.itf
         t0 = clock()
-        f_itf = itf.to_nodes(self.dem.forces(itf.ids))
+        f_itf = self.f_itf = itf.to_nodes(self.dem.forces(itf.ids))
         t1 = clock()
         if self.k % self.m == 0:
             fem.compute_forces()  # the FEM's own forces at t_n (f_coupling stays zero)

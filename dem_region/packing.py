@@ -27,6 +27,22 @@ def hexagonal_2d(lo, hi, radius: float) -> np.ndarray:
     return np.array(pts)
 
 
+def square_2d(lo, hi, radius: float) -> np.ndarray:
+    """(n, 3) centres of a square lattice (spacing 2r) in the x-y plane from lo to hi inclusive."""
+    pts = simple_cubic((lo[0], lo[1], 0.0), (hi[0], hi[1], 0.0), radius)
+    return pts
+
+
+def square_bonds(x: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:
+    """Bonds of a square lattice: (pairs (nb, 2), family (nb,)), family 0 = axial neighbours
+    at 2r, family 1 = diagonal neighbours at 2 sqrt(2) r (they carry the shear stiffness)."""
+    tree = cKDTree(x)
+    pairs = np.array(sorted(tree.query_pairs(2 * np.sqrt(2) * radius * (1 + 1e-6))), dtype=int).reshape(-1, 2)
+    dist = np.linalg.norm(x[pairs[:, 0]] - x[pairs[:, 1]], axis=1)
+    family = (dist > 2 * radius * (1 + 1e-6)).astype(int)
+    return pairs, family
+
+
 def simple_cubic(lo, hi, radius: float) -> np.ndarray:
     """(n, 3) centres of a simple cubic lattice (spacing 2r) from lo to hi inclusive."""
     axes = [np.arange(a, b + 1e-9 * radius, 2 * radius) for a, b in zip(lo, hi)]

@@ -67,6 +67,17 @@ class DemScene:
     def n(self) -> int:
         return len(self.x)
 
+    def without_bonds_within(self, ids: np.ndarray) -> "DemScene":
+        """A copy without the bonds whose two ends are both in ``ids`` (bonds inside an
+        interface band that the FEM already represents would count its stiffness twice)."""
+        inside = np.zeros(self.n, bool)
+        inside[ids] = True
+        keep = ~(inside[self.bonds[:, 0]] & inside[self.bonds[:, 1]])
+        kw = {k: v for k, v in self.__dict__.items()}
+        kw.update(bonds=self.bonds[keep], kn=self.kn[keep], ks=self.ks[keep], bond_family=self.bond_family[keep],
+                  groups=dict(self.groups))
+        return DemScene(**kw)
+
     def to_wire(self) -> dict:
         """Plain-Python form (arrays as dtype, shape, bytes) for another process, which may run
         a different numpy (the LAMMPS worker venv)."""

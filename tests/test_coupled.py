@@ -108,3 +108,17 @@ def test_worker_process_gives_the_same_numbers(femdem, tmp_path):
     assert set(glob.glob("/dev/shm/*")) <= shm_before
     ps = subprocess.run(["pgrep", "-f", "dem_region.worker"], capture_output=True, text=True)
     assert ps.stdout.strip() == ""
+
+
+def test_interface_patch_uniform_strain(femdem):
+    """Uniform strain across the tie: free particles balance to round-off, and the interface
+    residual is the bonds' geometric nonlinearity: it scales linearly with the strain."""
+    res = []
+    for e in (1e-4, 1e-5):
+        code, s, _ = femdem("run", "interface_patch", "--set", f"strain.xx={e}", "--set", f"strain.yy={-0.3 * e}",
+                            "--set", f"strain.xy={0.5 * e}", "--set", "mesh.spacing_ratio=2")
+        assert code == 0
+        assert_checks(s)
+        assert s["qoi"]["interface_force_rel"] == pytest.approx(1.0, rel=1e-3)  # the tie carries the stress
+        res.append(s["qoi"]["max_interface_residual_rel"])
+    assert res[1] / res[0] == pytest.approx(0.1, rel=0.05)

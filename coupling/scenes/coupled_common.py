@@ -30,6 +30,7 @@ def coupled_simulation(p: dict, make_fem: Callable[[np.ndarray], ExplicitDynamic
         itf = TransitionInterface.build(probe_fem.region, scene.x, scene.groups.get("interface", np.zeros(0, int)))
     except InterfaceError as exc:
         raise CaseError(f"interface: {exc}") from None
+    scene = scene.without_bonds_within(itf.ids)  # the FEM carries the band's stiffness
     fem = make_fem(itf.share_mass(scene.mass[itf.ids]))
     try:
         return _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, steps)

@@ -67,14 +67,19 @@ class YadeBackend:
             if scene.plane:
                 b.state.blockedDOFs = "zXY"
         self.law = w.Law2_ScGeom6D_CohFrictPhys_CohesionMoment()
+        # bonds may join spheres that do not touch (diagonals of a lattice, gaps of a random
+        # packing): YADE keeps an interaction only while it is within the detection range
+        i, j = scene.bonds.T if len(scene.bonds) else (np.zeros(0, int),) * 2
+        reach = np.linalg.norm(scene.x[i] - scene.x[j], axis=1) / (scene.radius[i] + scene.radius[j])
+        self.detection = max(1.0, 1.2 * float(reach.max())) if reach.size else 1.0
         setattr(__main__, _HOOK, self._hook)
         import yade.log
         yade.log.setLevel("NewtonIntegrator", yade.log.ERROR)
         O.engines = [
             w.NewtonIntegrator(damping=0.0),
             w.ForceResetter(),
-            w.InsertionSortCollider([w.Bo1_Sphere_Aabb()]),
-            w.InteractionLoop([w.Ig2_Sphere_Sphere_ScGeom6D()],
+            w.InsertionSortCollider([w.Bo1_Sphere_Aabb(aabbEnlargeFactor=self.detection)]),
+            w.InteractionLoop([w.Ig2_Sphere_Sphere_ScGeom6D(interactionDetectionFactor=self.detection)],
                               [w.Ip2_CohFrictMat_CohFrictMat_CohFrictPhys(setCohesionNow=False,
                                                                           setCohesionOnNewContacts=False)],
                               [self.law]),
