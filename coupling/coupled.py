@@ -82,7 +82,7 @@ class KinematicTie:
         P = np.zeros(3)
         P[: fem.region.dim] = fem.m @ fem.state.v
         self.momentum_snapshot = P + self._m_free @ self.dem.velocities()
-        v_n = fem.state.v + 0.5 * self.dt * fem.state.a + 0.5 * self.dt_dem * f_itf / fem.m[:, None]
+        v_n = self.v_snapshot = fem.state.v + 0.5 * self.dt * fem.state.a + 0.5 * self.dt_dem * f_itf / fem.m[:, None]
         f = fem.energies()
         d = self.dem.energies()
         kin_fem = 0.5 * float(np.einsum("n,ni,ni->", fem.m, v_n, v_n))

@@ -243,6 +243,11 @@ class FemRegion:
             S[..., J, I] = Sv
             yield q, (E if want_E else F), S
 
+    def element_strain_energy(self, u: np.ndarray) -> np.ndarray:
+        """(nel,) J, small-strain energy 0.5 u_e . k_e u_e of each element."""
+        ue = u.ravel()[self._edofs]
+        return 0.5 * np.einsum("ea,eab,eb->e", ue, self.ke, ue)
+
     def centroid_strain_stress(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Small-strain (nel, ns) strain and stress (Pa) at element centroids (Voigt)."""
         if not hasattr(self, "_B1"):

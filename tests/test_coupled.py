@@ -122,3 +122,13 @@ def test_interface_patch_uniform_strain(femdem):
         assert s["qoi"]["interface_force_rel"] == pytest.approx(1.0, rel=1e-3)  # the tie carries the stress
         res.append(s["qoi"]["max_interface_residual_rel"])
     assert res[1] / res[0] == pytest.approx(0.1, rel=0.05)
+
+
+@pytest.mark.parametrize("m", [1, 5])
+def test_interface_wave_transmission(femdem, m):
+    code, s, _ = femdem("run", "interface_wave", "--set", f"clock.substeps={m}")
+    assert code == 0
+    assert_checks(s)
+    assert s["clock"]["substeps"] == m
+    q = s["qoi"]
+    assert q["reflected_energy_fraction"] + q["transmitted_energy_fraction"] == pytest.approx(1.0, abs=0.01)
