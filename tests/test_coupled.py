@@ -132,3 +132,20 @@ def test_interface_wave_transmission(femdem, m):
     assert s["clock"]["substeps"] == m
     q = s["qoi"]
     assert q["reflected_energy_fraction"] + q["transmitted_energy_fraction"] == pytest.approx(1.0, abs=0.01)
+
+
+@pytest.mark.parametrize("m", [1, 5])
+def test_coupled_vibration_energy_short(femdem, m):
+    """5,000 FEM steps of the undamped coupled cantilever (the 10^5-step study is marked slow)."""
+    code, s, _ = femdem("run", "coupled_vibration", "--set", f"clock.substeps={m}", "--set", "run.steps=5000")
+    assert code == 0
+    assert_checks(s)
+    assert s["qoi"]["tip_amplitude"] > 1e-5  # it really vibrates
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("m", [1, 2, 5, 10])
+def test_coupled_vibration_energy_1e5_steps(femdem, m):
+    code, s, _ = femdem("run", "coupled_vibration", "--set", f"clock.substeps={m}")
+    assert code == 0 and s["clock"]["steps"] == 100_000
+    assert_checks(s)

@@ -12,8 +12,9 @@ from __future__ import annotations
 
 from types import ModuleType
 
-from . import (bar_wave, cantilever, chain_consistency, column_buckling, coupled_free_flight, free_vibration,
+from . import (bar_wave, cantilever, chain_consistency, column_buckling, coupled_free_flight, coupled_vibration,
+               free_vibration,
                interface_patch, interface_wave)
 
 Scene = ModuleType
-SCENES: dict[str, Scene] = {m.NAME: m for m in (bar_wave, cantilever, free_vibration, column_buckling, chain_consistency, coupled_free_flight, interface_patch, interface_wave)}
+SCENES: dict[str, Scene] = {m.NAME: m for m in (bar_wave, cantilever, free_vibration, column_buckling, chain_consistency, coupled_free_flight, interface_patch, interface_wave, coupled_vibration)}
