@@ -65,6 +65,7 @@ class Simulation:
     energy_growth_tol: float = 0.05
     close: Callable[[], None] = lambda: None
     timing_correction: Callable[[], dict[str, float]] | None = None
+    instability_hint: str = "time step above the stable limit, or a penalty too stiff"
     versions: dict[str, str] = field(default_factory=dict)
 
 
@@ -107,14 +108,14 @@ def run_clock(sim: Simulation, on_sample: Callable[[int, float], None] | None = 
         timing["orchestrator"] += clock() - t0
         bad = [k for k, v in values.items() if not math.isfinite(v)]
         if bad:
-            raise Instability(f"step {step}, t = {values['time']:.4g} s: {bad[0]} is not finite "
-                              f"(time step {sim.dt:.3g} s above the stable limit, or a penalty too stiff)")
+            raise Instability(f"step {step}, t = {values['time']:.4g} s: {bad[0]} is not finite; "
+                              f"likely cause: {sim.instability_hint}")
         # the trapezoidal ledger is O(dt)-rough over the first few steps of a transient
         warm = step >= max(50, sim.n_steps // 100)
         if warm and values["balance_error_rel"] > sim.energy_growth_tol:
             raise Instability(f"step {step}, t = {values['time']:.4g} s: energy balance error "
-                              f"{values['balance_error_rel']:.3g} exceeds {sim.energy_growth_tol:g} "
-                              "(energy created: unstable step, penetration or interface drift)")
+                              f"{values['balance_error_rel']:.3g} exceeds guards.energy_growth = {sim.energy_growth_tol:g} "
+                              f"(energy created); likely cause: {sim.instability_hint}")
         if on_sample:
             on_sample(step, values["time"])
 

@@ -19,7 +19,7 @@ from fem_region.explicit import ExplicitDynamics, PrescribedMotion
 from ..checks import bound
 from ..params import Param, positive
 from .common import make_region
-from .coupled_common import coupled_simulation
+from .coupled_common import COUPLING, coupled_simulation
 
 NAME = "chain_consistency"
 DESCRIPTION = "coupled: FEM bar + DEM chain vs the monolithic chain, to round-off"
@@ -34,6 +34,7 @@ PARAMETERS = {
     "load.duration": positive(2e-4, "pulse duration", "s"),
     "mesh.element": Param("quad4", "2D element", kind="str", choices=("quad4",)),
     "fem.integration": Param("full", "FEM integration", kind="str", choices=("full", "selective")),
+    **COUPLING,
     "fem.formulation": Param("linear", "FEM internal force path", kind="str", choices=("linear",)),
 }
 
@@ -70,16 +71,16 @@ def build(p: dict, mode: str, dem: str):
                                                                 PrescribedMotion(np.arange(region.n_nodes) * 2 + 1)],
                                               extra_mass=extra_mass)
     t_end_default = 1.5 * (nf + nd) * le / np.sqrt(E / p["material.rho"])
-    sim, coupler = coupled_simulation(p, fem, scene, dem, t_end_default, history_every=1)
+    sim, clock = coupled_simulation(p, fem, scene, dem, t_end_default, history_every=1)
     free = np.arange(1, nd + 1)
     xp0 = scene.x[:, 0]
     fem_nodes = np.array([region.nodes_where(lambda X, xx=xx: (np.abs(X[0] - xx) < 1e-12) & (X[1] < 1e-12))[0]
                           for xx in le * np.arange(nf + 1)])
     probes = {}
     for j, a in enumerate(fem_nodes):
-        probes[f"u_fem_{j}"] = lambda a=a: float(coupler.u_snapshot[a, 0])
+        probes[f"u_fem_{j}"] = lambda a=a: float(clock.u_snapshot[a, 0])
     for j in free:
-        probes[f"u_dem_{j}"] = lambda j=j: float(coupler.dem.positions()[j, 0] - xp0[j])
+        probes[f"u_dem_{j}"] = lambda j=j: float(clock.dem.positions()[j, 0] - xp0[j])
     sim.probes.update(probes)
     return sim
 

@@ -10,10 +10,21 @@ from dem_region.scene import DemScene
 from fem_region.explicit import ExplicitDynamics
 from interfaces.transition import InterfaceError, TransitionInterface
 
-from ..coupled import KinematicTie
-from ..params import CaseError
+from interfaces.ties import KinematicTie, PenaltyTie
+
+from ..coupled import CoupledClock
+from ..params import CaseError, Param
 from ..simulation import FieldFrame, Simulation
 from .common import n_steps, time_step
+
+
+# parameters every coupled scene takes (spread into its PARAMETERS)
+COUPLING: dict[str, Param] = {
+    "interface.tie": Param("kinematic", "tie scheme: kinematic (interface particles slaved to the FEM) or "
+                           "penalty (springs to their host points, the seed paper's transition contact)",
+                           kind="str", choices=("kinematic", "penalty")),
+    "interface.penalty": Param(0.0, "penalty tie stiffness per particle; 0 = 4 x the stiffest bond", unit="N/m", low=0.0),
+}
 
 
 def coupled_simulation(p: dict, make_fem: Callable[[np.ndarray], ExplicitDynamics], scene: DemScene,
@@ -30,8 +41,12 @@ def coupled_simulation(p: dict, make_fem: Callable[[np.ndarray], ExplicitDynamic
         itf = TransitionInterface.build(probe_fem.region, scene.x, scene.groups.get("interface", np.zeros(0, int)))
     except InterfaceError as exc:
         raise CaseError(f"interface: {exc}") from None
-    scene = scene.without_bonds_within(itf.ids)  # the FEM carries the band's stiffness
-    fem = make_fem(itf.share_mass(scene.mass[itf.ids]))
+    if p["interface.tie"] == "kinematic":
+        scene = scene.without_bonds_within(itf.ids)  # the FEM carries the band's stiffness
+        node_mass = itf.share_mass(scene.mass[itf.ids])
+    else:
+        node_mass = None
+    fem = make_fem(node_mass)
     try:
         return _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, steps)
     except BaseException:
@@ -41,17 +56,25 @@ def coupled_simulation(p: dict, make_fem: Callable[[np.ndarray], ExplicitDynamic
 
 def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, steps):
     backend.build(scene)
-    dt_fem, dt_dem = fem.critical_dt(), backend.critical_dt()
-    m = p["clock.substeps"] or max(1, int(np.floor(dt_fem / dt_dem)))  # 0: as many as the FEM step allows
+    if p["interface.tie"] == "kinematic":
+        tie = KinematicTie(itf, backend, scene.mass)
+    else:
+        tie = PenaltyTie(itf, backend, scene.mass, p["interface.penalty"] or 4 * float(scene.kn.max()))
+    dt_fem, dt_dem = fem.critical_dt(), min(backend.critical_dt(), tie.critical_dt(fem.m))
+    # 0 = automatic: as many substeps as the FEM step allows with the kinematic tie; one with
+    # the penalty tie, whose stiff spring mode makes impulse time stepping resonate when the
+    # FEM step is near a multiple of its period (measured: unstable at m = 4, k = 2e8 N/m)
+    auto = max(1, int(np.floor(dt_fem / dt_dem))) if p["interface.tie"] == "kinematic" else 1
+    m = p["clock.substeps"] or auto
     n, dt = n_steps(p, t_end_default, time_step(p, min(dt_fem, m * dt_dem)))
     if steps:
         n, dt = steps, time_step(p, min(dt_fem, m * dt_dem))
     if dt / m > dt_dem:
         raise CaseError(f"clock.dt = {p['clock.dt']:g}: the DEM substep dt/{m} is above the DEM stable step "
                         f"{dt_dem:.4g} s; allowed <= {m * dt_dem:.4g} s")
-    tie = KinematicTie(fem, backend, itf, dt, m)
+    clock = CoupledClock(fem, backend, tie, dt, m)
     every = history_every or p["output.history_every"] or max(1, n // 1000)
-    tie.snapshot_every, tie.last_window = every, n
+    clock.snapshot_every, clock.last_window = every, n
     region = fem.region
     pts0 = np.vstack([np.pad(region.X, ((0, 0), (0, 3 - region.dim))), scene.x])
     cell = {"quad4": "quad", "tri3": "triangle", "hex8": "hexahedron", "tet4": "tetra"}[region.etype.name]
@@ -63,12 +86,23 @@ def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, st
         return FieldFrame(pts0, cells, {"displacement": u, "radius": radius})
 
     sim = Simulation(
-        stages=tie.stages(), dt=dt, n_steps=n,
+        stages=clock.stages(), dt=dt, n_steps=n,
         history_every=every,
-        probes={}, energies=tie.energies,
+        probes={}, energies=clock.energies,
         counts={"fem_nodes": region.n_nodes, "fem_elements": region.n_elements, "particles": scene.n,
                 "bonds": len(scene.bonds), "interface_particles": len(itf.ids)},
         clock_info={"dt_fem": dt, "dt_dem": dt / m, "dt_stable_fem": dt_fem, "dt_stable_dem": dt_dem, "substeps": m},
         fields=fields, field_frames=p["output.field_frames"], energy_growth_tol=p["guards.energy_growth"],
-        close=backend.finalize, versions={dem: backend.version}, timing_correction=tie.timing_correction)
-    return sim, tie
+        close=backend.finalize, versions={dem: backend.version}, timing_correction=clock.timing_correction,
+        instability_hint=_hint(p, tie, m, dt, dt_dem))
+    return sim, clock
+
+
+def _hint(p: dict, tie, m: int, dt: float, dt_dem_stable: float) -> str:
+    """What to try when a coupled run goes unstable."""
+    if m == 1:
+        return f"check the time step (clock.safety = {p['clock.safety']:g}) and the interface"
+    omega = 2.0 / dt_dem_stable  # the fastest DEM-side mode
+    return (f"{m} DEM substeps per FEM step of {dt:.3g} s = {dt * omega / np.pi:.1f} half-periods of the fastest "
+            f"DEM mode ({tie.name} tie): impulse time stepping resonates near whole periods; try "
+            "clock.substeps=1 or another substep count")

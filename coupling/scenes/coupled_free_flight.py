@@ -15,7 +15,7 @@ from fem_region.explicit import ExplicitDynamics
 from ..checks import bound
 from ..params import Param, positive
 from .common import make_region
-from .coupled_common import coupled_simulation
+from .coupled_common import COUPLING, coupled_simulation
 
 NAME = "coupled_free_flight"
 DESCRIPTION = "coupled: free FEM block + bonded lattice, momentum conserved to 1e-12"
@@ -34,6 +34,7 @@ PARAMETERS = {
     "run.steps": Param(400, "FEM steps", kind="int", low=1),
     "mesh.element": Param("quad4", "2D element", kind="str", choices=("quad4", "tri3")),
     "fem.integration": Param("full", "FEM integration", kind="str", choices=("full", "selective", "reduced")),
+    **COUPLING,
     "fem.formulation": Param("linear", "FEM path", kind="str", choices=("linear", "total_lagrangian")),
 }
 
@@ -68,9 +69,9 @@ def build(p: dict, mode: str, dem: str):
         dyn.set_initial_velocity(drift[:2] + p["motion.perturbation"] * rng.uniform(-1, 1, (region.n_nodes, 2)))
         return dyn
 
-    sim, tie = coupled_simulation(p, fem, scene, dem, 1.0, history_every=p["output.history_every"] or 1,
+    sim, clock = coupled_simulation(p, fem, scene, dem, 1.0, history_every=p["output.history_every"] or 1,
                                   steps=p["run.steps"])
-    sim.probes.update({f"momentum_{c}": (lambda i=i: float(tie.momentum()[i])) for i, c in enumerate("xy")})
+    sim.probes.update({f"momentum_{c}": (lambda i=i: float(clock.momentum()[i])) for i, c in enumerate("xy")})
     return sim
 
 

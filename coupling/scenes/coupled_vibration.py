@@ -18,7 +18,7 @@ from fem_region.explicit import ExplicitDynamics, PrescribedMotion
 from ..checks import bound
 from ..params import Param, positive
 from .common import make_region
-from .coupled_common import coupled_simulation
+from .coupled_common import COUPLING, coupled_simulation
 
 NAME = "coupled_vibration"
 DESCRIPTION = "coupled: undamped FEM + lattice cantilever, energy drift over 10^5 steps"
@@ -34,6 +34,7 @@ PARAMETERS = {
     "run.steps": Param(100_000, "FEM steps", kind="int", low=10),
     "mesh.element": Param("quad4", "2D element", kind="str", choices=("quad4",)),
     "fem.integration": Param("selective", "FEM integration", kind="str", choices=("full", "selective")),
+    **COUPLING,
     "fem.formulation": Param("linear", "FEM path", kind="str", choices=("linear",)),
 }
 
@@ -71,10 +72,10 @@ def build(p: dict, mode: str, dem: str):
         return dyn
 
     steps = p["run.steps"]
-    sim, tie = coupled_simulation(p, fem, scene, dem, 1.0, history_every=p["output.history_every"] or max(1, steps // 500),
+    sim, clock = coupled_simulation(p, fem, scene, dem, 1.0, history_every=p["output.history_every"] or max(1, steps // 500),
                                   steps=steps)
     tip = np.argmax(x[:, 0] + x[:, 1] * 1e-6)
-    sim.probes["tip_displacement"] = lambda: float(tie.dem.positions()[tip, 1] - x[tip, 1])
+    sim.probes["tip_displacement"] = lambda: float(clock.dem.positions()[tip, 1] - x[tip, 1])
     return sim
 
 

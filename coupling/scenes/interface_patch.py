@@ -27,7 +27,7 @@ from fem_region.explicit import ExplicitDynamics
 from ..checks import bound
 from ..params import Param, positive
 from .common import make_region
-from .coupled_common import coupled_simulation
+from .coupled_common import COUPLING, coupled_simulation
 
 NAME = "interface_patch"
 DESCRIPTION = "coupled: uniform strain across the interface, no spurious interface force"
@@ -45,6 +45,7 @@ PARAMETERS = {
     "strain.xy": Param(5e-5, "uniform (tensor) shear strain component", low=-1e-2, high=1e-2),
     "mesh.element": Param("quad4", "2D element", kind="str", choices=("quad4", "tri3")),
     "fem.integration": Param("full", "FEM integration", kind="str", choices=("full", "selective", "reduced")),
+    **COUPLING,
     "fem.formulation": Param("linear", "FEM path", kind="str", choices=("linear",)),
 }
 
@@ -74,26 +75,26 @@ def build(p: dict, mode: str, dem: str):
         dyn.set_initial_velocity(dyn.region.X @ G.T / dt)
         return dyn
 
-    sim, tie = coupled_simulation({**p, "clock.dt": dt, "clock.substeps": 1}, fem, scene, dem, dt, history_every=1, steps=1)
-    dyn = tie.fem
+    sim, clock = coupled_simulation({**p, "clock.dt": dt, "clock.substeps": 1}, fem, scene, dem, dt, history_every=1, steps=1)
+    dyn = clock.fem
 
     X = dyn.region.X
     edge = (X[:, 1] < 1e-9 * h) | (X[:, 1] > H - 1e-9 * h) | (X[:, 0] < 1e-9 * h)
     inner_nodes = np.flatnonzero(~edge)
-    xs = tie.dem.scene.x
+    xs = clock.dem.scene.x
     free_inner = np.flatnonzero((xs[:, 0] > Lf + 0.5 * d) & (xs[:, 0] < xs[:, 0].max() - 0.5 * d)
                                 & (xs[:, 1] > 0.5 * d) & (xs[:, 1] < H - 0.5 * d))
     sigma = D @ np.array([G[0, 0], G[1, 1], 2 * G[0, 1]])
     scale = np.abs(sigma).max() * h * d  # nodal force of the uniform stress on one edge
 
     def residual_nodes():
-        return float(np.abs(tie.f_itf[inner_nodes] - dyn.f_int[inner_nodes]).max() / scale)
+        return float(np.abs(clock.f_tie[inner_nodes] - dyn.f_int[inner_nodes]).max() / scale)
 
     def residual_particles():
-        return float(np.abs(tie.dem.forces(free_inner)).max() / scale)
+        return float(np.abs(clock.dem.forces(free_inner)).max() / scale)
 
     def interface_force():  # the force the lattice returns to the interface nodes is real
-        return float(np.abs(tie.f_itf).max() / scale)
+        return float(np.abs(clock.f_tie).max() / scale)
 
     sim.probes.update({"max_interface_residual_rel": residual_nodes, "max_free_particle_force_rel": residual_particles,
                        "interface_force_rel": interface_force})

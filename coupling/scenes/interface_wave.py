@@ -22,7 +22,7 @@ from fem_region.loads import sine_squared
 from ..checks import bound
 from ..params import Param, positive
 from .common import make_region
-from .coupled_common import coupled_simulation
+from .coupled_common import COUPLING, coupled_simulation
 
 NAME = "interface_wave"
 DESCRIPTION = "coupled: pulse FEM -> DEM -> FEM, reflected < 2 %, transmitted > 95 %"
@@ -38,6 +38,7 @@ PARAMETERS = {
     "load.wavelength": Param(20.0, "pulse length in elements (>= 10 resolves it)", low=4.0),
     "mesh.element": Param("quad4", "2D element", kind="str", choices=("quad4",)),
     "fem.integration": Param("full", "FEM integration", kind="str", choices=("full",)),
+    **COUPLING,
     "fem.formulation": Param("linear", "FEM path", kind="str", choices=("linear",)),
 }
 
@@ -84,19 +85,19 @@ def build(p: dict, mode: str, dem: str):
                                 extra_mass=extra_mass)
 
     t_end = (n1 + nd + 0.6 * p["chain.right_elements"]) * le / c + T
-    sim, tie = coupled_simulation(p, fem, scene, dem, t_end)
-    fem_ = tie.fem
+    sim, clock = coupled_simulation(p, fem, scene, dem, t_end)
+    fem_ = clock.fem
 
     def energy(nodes, elements):
         def f():
-            v, u = tie.v_snapshot, tie.u_snapshot
+            v, u = clock.v_snapshot, clock.u_snapshot
             return float(0.5 * fem_.m[nodes] @ np.sum(v[nodes] ** 2, axis=1)
                          + fem_.region.element_strain_energy(u)[elements].sum())
         return f
 
     sim.probes.update({"energy_left": energy(parts["left_nodes"], parts["left_el"]),
                        "energy_right": energy(parts["right_nodes"], parts["right_el"]),
-                       "energy_total": lambda: float(tie.snapshot["kinetic"] + tie.snapshot["internal"])})
+                       "energy_total": lambda: float(clock.snapshot["kinetic"] + clock.snapshot["internal"])})
     return sim
 
 

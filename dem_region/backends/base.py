@@ -44,6 +44,12 @@ class DemBackend(Protocol):
     def forces(self, ids: np.ndarray) -> np.ndarray:
         """(k, 3) N: force the rest of the scene exerts on particles ``ids`` at this step."""
 
+    def add_forces(self, ids: np.ndarray, F: np.ndarray) -> None:
+        """Add forces F (k, 3) N to particles ``ids`` for the next move (penalty tie)."""
+
+    def positions_of(self, ids: np.ndarray) -> np.ndarray:
+        """(k, 3) m, current positions of particles ``ids``."""
+
     def positions(self) -> np.ndarray: ...
 
     def velocities(self) -> np.ndarray: ...

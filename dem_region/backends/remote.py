@@ -100,6 +100,12 @@ class RemoteBackend:
             raise ValueError("remote engines take velocities only for the prescribed interface set")
         self.V[:] = v
 
+    def add_forces(self, ids: np.ndarray, F: np.ndarray) -> None:
+        self._call("call", "add_forces", np.asarray(ids).tolist(), np.asarray(F).tolist())
+
+    def positions_of(self, ids: np.ndarray) -> np.ndarray:
+        return np.asarray(self._call("call", "positions_of", np.asarray(ids).tolist())[1])
+
     def positions(self) -> np.ndarray:
         return np.asarray(self._call("call", "positions")[1])
 

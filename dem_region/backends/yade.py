@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import os
 import sys
 from typing import Callable
 
@@ -25,6 +26,9 @@ _UNBREAKABLE = 1e300
 
 
 def _import_yade():
+    # one OpenMP thread unless the user asks for more: as fast for the small zones measured
+    # here (8.7 s vs 9.0 s wall, half the CPU) and it leaves the other core to the FEM side
+    os.environ.setdefault("OMP_NUM_THREADS", "1")
     if YADE_PY not in sys.path:
         sys.path.insert(1, YADE_PY)
     with contextlib.redirect_stdout(io.StringIO()):  # yade prints 'Using python version' on import
@@ -128,6 +132,16 @@ class YadeBackend:
     def forces(self, ids: np.ndarray) -> np.ndarray:
         f = self.O.forces.f
         return np.array([tuple(f(int(i))) for i in ids]).reshape(-1, 3)
+
+    def add_forces(self, ids: np.ndarray, F: np.ndarray) -> None:
+        """Forces (k, 3) N added to particles ``ids`` for the next move (call from the hook)."""
+        V3, add = self.yade.Vector3, self.O.forces.addF
+        for i, f in zip(ids, np.asarray(F, float)):
+            add(int(i), V3(*f))
+
+    def positions_of(self, ids: np.ndarray) -> np.ndarray:
+        bodies = self.O.bodies
+        return np.array([tuple(bodies[int(i)].state.pos) for i in ids]).reshape(-1, 3)
 
     def positions(self) -> np.ndarray:
         return np.array([tuple(b.state.pos) for b in self.O.bodies])
