@@ -42,7 +42,7 @@ def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool) -> t
             if bar:
                 bar.close()
         if status == "ok":
-            qoi, checks = scene.evaluate(case.parameters, result["history"])
+            qoi, checks = scene.evaluate(case.parameters, result["history"], mode)
             t0 = time.perf_counter()
             scene.plot(case.parameters, result["history"], qoi, writer.dir / "plots")
             result["timing_s"]["io"] += time.perf_counter() - t0

@@ -4,7 +4,7 @@ A scene module declares NAME, DESCRIPTION, MODES (the modes it supports), PARAME
 (dotted key -> Param) and three functions:
 
 - ``build(p, mode, dem) -> Simulation``: participants, interface and clock stages;
-- ``evaluate(p, history) -> (qoi, checks)``: quantities of interest, and checks against
+- ``evaluate(p, history, mode) -> (qoi, checks)``: quantities of interest, and checks against
   closed forms computed from ``p`` ({value, reference, rel_err, tol, passed, source});
 - ``plot(p, history, qoi, plots_dir)``: the case's figures.
 """

@@ -57,7 +57,7 @@ def build(p: dict, mode: str, dem: str):
     return fem_only(dyn, p, t_end, probes)
 
 
-def evaluate(p: dict, h: dict):
+def evaluate(p: dict, h: dict, mode: str):
     L = p["geometry.length"]
     t = h["time"]
     arrivals = []

@@ -77,7 +77,7 @@ def build(p: dict, mode: str, dem: str):
     return fem_only(dyn, p, 14.0 / omega1, probes)
 
 
-def evaluate(p: dict, h: dict):
+def evaluate(p: dict, h: dict, mode: str):
     d = float(h["tip_deflection"][-1])
     qoi = {"tip_deflection": d, "residual_tip_velocity": float(abs(h["tip_velocity"][-1]))}
     return qoi, {"tip_deflection": check(d, timoshenko(p), 0.02, "Timoshenko beam, kappa = 5/6")}

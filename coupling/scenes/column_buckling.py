@@ -77,7 +77,7 @@ def build(p: dict, mode: str, dem: str):
     return fem_only(dyn, p, T + p["load.hold_periods"] * 2 * np.pi / omega1, probes)
 
 
-def evaluate(p: dict, h: dict):
+def evaluate(p: dict, h: dict, mode: str):
     t = h["time"]
     hold = p["load.hold_periods"] / (p["load.duration_periods"] + p["load.hold_periods"])
     plateau = t >= t[-1] * (1 - 0.25 * hold)

@@ -75,7 +75,7 @@ def build(p: dict, mode: str, dem: str):
     return sim
 
 
-def evaluate(p: dict, h: dict):
+def evaluate(p: dict, h: dict, mode: str):
     P = np.column_stack([h["momentum_x"], h["momentum_y"]])
     drift = float(np.abs(P - P[0]).max() / np.linalg.norm(P[0]))
     return ({"momentum_drift_rel": drift},

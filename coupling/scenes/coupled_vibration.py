@@ -79,7 +79,7 @@ def build(p: dict, mode: str, dem: str):
     return sim
 
 
-def evaluate(p: dict, h: dict):
+def evaluate(p: dict, h: dict, mode: str):
     E = h["kinetic"] + h["internal"]
     drift = float(np.abs(E - E[0]).max() / E[0])
     return ({"energy_drift_rel": drift, "tip_amplitude": float(np.abs(h["tip_displacement"]).max())},

@@ -101,7 +101,7 @@ def build(p: dict, mode: str, dem: str):
     return sim
 
 
-def evaluate(p: dict, h: dict):
+def evaluate(p: dict, h: dict, mode: str):
     qoi = {k: float(h[k][-1]) for k in ("max_interface_residual_rel", "max_free_particle_force_rel", "interface_force_rel")}
     src = "uniform strain is an equilibrium state of both sides"
     strain = max(abs(p["strain.xx"]), abs(p["strain.yy"]), abs(p["strain.xy"]))

@@ -101,7 +101,7 @@ def build(p: dict, mode: str, dem: str):
     return sim
 
 
-def evaluate(p: dict, h: dict):
+def evaluate(p: dict, h: dict, mode: str):
     total = h["energy_total"][-1]
     refl, trans = h["energy_left"][-1] / total, h["energy_right"][-1] / total
     qoi = {"reflected_energy_fraction": float(refl), "transmitted_energy_fraction": float(trans)}
