@@ -38,8 +38,8 @@ class TransitionInterface:
         basis = skfem.Basis(region.mesh, region.etype.element_cls())
         try:
             W = basis.probes(pts).tocsr()
-        except ValueError as exc:  # skfem's element finder: a point outside every element
-            raise InterfaceError(f"interface particle outside the FEM mesh ({exc})") from None
+        except ValueError:  # some point is outside every element, or on the boundary by round-off
+            W = sp.vstack([cls._host_one(basis, region, pts[:, i], ids[i], tol) for i in range(pts.shape[1])]).tocsr()
         W.eliminate_zeros()
         rows = np.asarray(W.sum(axis=1)).ravel()
         bad = np.flatnonzero(np.abs(rows - 1.0) > tol)
@@ -48,6 +48,28 @@ class TransitionInterface:
             raise InterfaceError(f"interface particle {p} at {x[p]} has weights summing to {rows[bad[0]]:.6g}, not 1 "
                                  "(no FEM element hosts it)")
         return cls(ids, W, region.dim)
+
+    @staticmethod
+    def _host_one(basis, region: FemRegion, pt: np.ndarray, pid: int, tol: float) -> sp.csr_matrix:
+        """Weights of one point; a point on the mesh boundary that the element finder rejects by
+        round-off is moved 1e-9 element sizes towards the nearest element centre."""
+        try:
+            return basis.probes(pt[:, None])
+        except ValueError:
+            pass
+        centres = region.X[region.mesh.t.T].mean(axis=1)
+        e = int(np.argmin(np.sum((centres - pt) ** 2, axis=1)))
+        size = np.ptp(region.X[region.mesh.t[:, e]], axis=0).max()
+        step = centres[e] - pt
+        dist = np.linalg.norm(step)
+        if dist > 0:
+            nudged = pt + step / dist * min(1e-9 * size, dist)
+            try:
+                return basis.probes(nudged[:, None])
+            except ValueError:
+                pass
+        raise InterfaceError(f"interface particle {pid} at {pt} lies outside the FEM mesh; allowed: particles "
+                             "inside or on the boundary of the FEM region")
 
     def to_particles(self, nodal: np.ndarray) -> np.ndarray:
         """nodal (n_nodes, dim) -> (k, 3) values at the interface particles (z = 0 in 2D)."""
