@@ -41,12 +41,28 @@ class RemoteBackend:
         self.ids = np.zeros(0, int)
         self.prescribed = self.ids
 
-    def _call(self, *msg):
-        self.conn.send(msg)
+    def _died(self) -> EngineUnavailable:
         try:
-            reply = self.conn.recv()
-        except EOFError:
-            raise EngineUnavailable(f"--dem {self.name}: the engine worker died (exit code {self.proc.poll()})") from None
+            code = self.proc.wait(timeout=5)
+        except subprocess.TimeoutExpired:
+            code = None
+        return EngineUnavailable(f"--dem {self.name}: the engine worker died (exit code {code})")
+
+    def _send(self, msg) -> None:
+        try:
+            self.conn.send(msg)
+        except OSError:
+            raise self._died() from None
+
+    def _recv(self):
+        try:
+            return self.conn.recv()
+        except (EOFError, OSError):
+            raise self._died() from None
+
+    def _call(self, *msg):
+        self._send(msg)
+        reply = self._recv()
         if reply[0] == "error":
             raise RuntimeError(f"{self.name} worker: {reply[1]}")
         return reply
@@ -69,16 +85,13 @@ class RemoteBackend:
         self._call("prescribe", self.ids.tolist(), self.blocks[0].name, self.blocks[1].name)
 
     def _run(self, op: str, between: Callable[[], None] | None, n: int = 1) -> None:
-        self.conn.send((op, n))
+        self._send((op, n))
         while True:
-            try:
-                msg = self.conn.recv()
-            except EOFError:
-                raise EngineUnavailable(f"--dem {self.name}: the engine worker died (exit code {self.proc.poll()})") from None
+            msg = self._recv()
             if msg[0] == "hook":
                 if between is not None:
                     between()
-                self.conn.send(("go",))
+                self._send(("go",))
             elif msg[0] == "done":
                 return
             else:
