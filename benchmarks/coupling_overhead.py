@@ -1,0 +1,52 @@
+"""Coupling overhead of the FEM + DEM clock at about 10^4 particles and 750 interface particles.
+
+Usage: .venv/bin/python benchmarks/coupling_overhead.py [--repeat 3] [--steps 200]
+Runs coupled_free_flight scaled to a 0.864 m tall lattice (10,729 particles, 749 of them in
+the interface band) with the engine in-process and in a worker process; prints the medians
+of the per-step times and of (interface + orchestrator) / DEM engine time.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+SETS = ["geometry.height=0.864", "geometry.dem_length=0.04", "geometry.fem_length=0.02",
+        "output.field_frames=0", "output.history_every=100000"]
+
+
+def run(process: str, steps: int) -> dict:
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "run"
+        args = [sys.executable, "-m", "coupling.cli", "run", "coupled_free_flight", "--quiet", "--out", str(out),
+                "--set", f"run.steps={steps}", "--set", f"dem.process={process}"]
+        for s in SETS:
+            args += ["--set", s]
+        subprocess.run(args, cwd=ROOT, check=True)
+        return json.loads((out / "summary.json").read_text())
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--steps", type=int, default=200)
+    a = ap.parse_args()
+    print("| engine process | particles | interface | DEM [ms/step] | interface [ms/step] | FEM [ms/step] | overhead ratio |")
+    print("|---|---|---|---|---|---|---|")
+    for process in ("in-process", "worker"):
+        rows = [run(process, a.steps) for _ in range(a.repeat)]
+        med = lambda k: statistics.median(r["timing_s"][k] for r in rows) / a.steps * 1e3
+        ratio = statistics.median((r["timing_s"]["interface"] + r["timing_s"]["orchestrator"]) / r["timing_s"]["dem"]
+                                  for r in rows)
+        c = rows[0]["counts"]
+        print(f"| {process} | {c['particles']:,} | {c['interface_particles']} | {med('dem'):.2f} | "
+              f"{med('interface'):.2f} | {med('fem'):.2f} | {ratio:.3f} |", flush=True)
+
+
+if __name__ == "__main__":
+    main()
