@@ -26,7 +26,12 @@ class DemScene:
     bonds: (nb, 2) particle index pairs; kn, ks: (nb,) N/m; bond_family: (nb,) int index into
     ``laws``; groups: name -> particle indices ("interface", "clamped", ...);
     plane: True for quasi-2D scenes (motion out of the x-y plane and rotations about x, y blocked);
-    velocity: (n, 3) m/s initial velocities (zero if not given).
+    velocity: (n, 3) m/s initial velocities (zero if not given);
+    young, poisson: (n,) or scalar, elastic constants of the particle material (Pa, -), used by
+    the contact law of particles that touch without a bond; contact: "linear" (linear spring,
+    the bonded scenes) or "hertz_mindlin" (Hertz normal, Mindlin tangential, with a normal and
+    tangential coefficient of restitution ``restitution``); the group "fixed" holds particles
+    that do not move (rigid supports, e.g. a very large sphere standing in for a plane).
     """
 
     x: np.ndarray
@@ -40,14 +45,22 @@ class DemScene:
     laws: list = field(default_factory=lambda: [ElasticBond()])
     groups: dict[str, np.ndarray] = field(default_factory=dict)
     plane: bool = False
-    young: float = 1e9  # contact modulus for unbonded touching particles (Pa)
-    poisson: float = 0.3
+    young: np.ndarray | float = 1e9
+    poisson: np.ndarray | float = 0.3
     friction_deg: float = 0.0
+    contact: str = "linear"
+    restitution: float = 1.0
     velocity: np.ndarray | None = None
 
     def __post_init__(self):
         n = len(self.x)
         self.velocity = np.zeros((n, 3)) if self.velocity is None else np.asarray(self.velocity, float).reshape(n, 3)
+        self.young = np.broadcast_to(np.asarray(self.young, float), (n,)).copy()
+        self.poisson = np.broadcast_to(np.asarray(self.poisson, float), (n,)).copy()
+        if self.contact not in ("linear", "hertz_mindlin"):
+            raise ValueError(f"contact {self.contact!r}: allowed linear, hertz_mindlin")
+        if self.contact == "hertz_mindlin" and len(self.bonds):
+            raise ValueError("bonded scenes use the linear contact law")
         self.x = np.asarray(self.x, float).reshape(n, 3)
         self.radius = np.broadcast_to(np.asarray(self.radius, float), (n,)).copy()
         self.density = np.broadcast_to(np.asarray(self.density, float), (n,)).copy()
@@ -117,6 +130,9 @@ class DemScene:
         omega_max^2 <= max_i sum_j k_ij (1/m_i + 1/sqrt(m_i m_j)) over bonds with k = max(kn, ks).
         """
         m = self.mass
+        if not len(self.bonds):  # granular: the Rayleigh wave step of the smallest particle
+            G = self.young / (2 * (1 + self.poisson))
+            return float(np.min(np.pi * self.radius * np.sqrt(self.density / G) / (0.1631 * self.poisson + 0.8766)))
         i, j = self.bonds.T
         k = np.maximum(self.kn, self.ks)
         cross = k / np.sqrt(m[i] * m[j])

@@ -35,8 +35,10 @@ class PrescribedParticles:
 
 
 def dem_only(p: dict, scene: DemScene, dem: str, t_end_default: float,
-             drive: tuple[np.ndarray, Callable[[float], np.ndarray]], history_every: int = 0):
-    """(Simulation, backend, PrescribedParticles) for ``scene`` alone, driven on drive[0]."""
+             drive: tuple[np.ndarray, Callable[[float], np.ndarray]] | None = None, history_every: int = 0,
+             dt: float = 0.0):
+    """(Simulation, backend, PrescribedParticles or None) for ``scene`` alone, driven on
+    drive[0] with velocity drive[1](t) if given; dt: the step if the scene sets it (s)."""
     try:
         backend = make_backend(dem, p["dem.process"])
     except EngineUnavailable as exc:
@@ -44,21 +46,20 @@ def dem_only(p: dict, scene: DemScene, dem: str, t_end_default: float,
     try:
         backend.build(scene)
         dt_stable = backend.critical_dt()
-        n, dt = n_steps(p, t_end_default, time_step(p, dt_stable))
-        driver = PrescribedParticles(backend, drive[0], drive[1], dt)
+        n, dt = n_steps(p, t_end_default, min(dt, dt_stable) if dt else time_step(p, dt_stable))
+        driver = PrescribedParticles(backend, drive[0], drive[1], dt) if drive else None
+        hook = driver.between if driver else None
         backend.set_dt(dt)
-        backend.start(driver.between)
+        backend.start(hook)
     except BaseException:
         backend.finalize()
         raise
-    m_free = scene.mass.copy()
-    m_free[driver.ids] = 0.0
-
     def energies():
         d = backend.energies()
-        # the drive's work is counted up to the move that follows the last force evaluation
-        return {"kinetic": d["kinetic"], "internal": d["elastic"],
-                "external_work": driver.work - float(np.sum(-backend.forces(driver.ids) * backend.velocities()[driver.ids])) * dt,
+        work = 0.0
+        if driver:  # the drive's work up to the move that follows the last force evaluation
+            work = driver.work - float(np.sum(-backend.forces(driver.ids) * backend.velocities()[driver.ids])) * dt
+        return {"kinetic": d["kinetic"], "internal": d["elastic"], "external_work": work,
                 "dissipated": d["dissipated"]}
 
     pts0 = scene.x
@@ -68,7 +69,7 @@ def dem_only(p: dict, scene: DemScene, dem: str, t_end_default: float,
                           {"displacement": backend.positions() - scene.x, "radius": scene.radius})
 
     sim = Simulation(
-        stages=[Stage("dem.step", "dem", lambda: backend.advance(driver.between))], dt=dt, n_steps=n,
+        stages=[Stage("dem.step", "dem", lambda: backend.advance(hook))], dt=dt, n_steps=n,
         history_every=history_every or p["output.history_every"] or max(1, n // 1000), probes={}, energies=energies,
         counts={"fem_nodes": 0, "fem_elements": 0, "particles": scene.n, "bonds": len(scene.bonds),
                 "interface_particles": 0},

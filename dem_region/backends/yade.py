@@ -63,20 +63,33 @@ class YadeBackend:
         O, w, utils = self.O, self.w, self.yade.utils
         O.reset()
         self.scene = scene
-        mat = O.materials.append(w.CohFrictMat(
-            young=scene.young, poisson=scene.poisson, density=float(scene.density.mean()),
-            frictionAngle=np.radians(scene.friction_deg), isCohesive=True, momentRotationLaw=False,
-            normalCohesion=_UNBREAKABLE, shearCohesion=_UNBREAKABLE))
+        hertz = scene.contact == "hertz_mindlin"
+        mats = {}  # one YADE material per distinct (E, nu, rho)
+        for key in sorted(set(zip(scene.young.tolist(), scene.poisson.tolist(), scene.density.tolist()))):
+            E, nu, rho = key
+            common = dict(young=E, poisson=nu, density=rho, frictionAngle=np.radians(scene.friction_deg))
+            mats[key] = O.materials.append(w.FrictMat(**common) if hertz else w.CohFrictMat(
+                **common, isCohesive=True, momentRotationLaw=False,
+                normalCohesion=_UNBREAKABLE, shearCohesion=_UNBREAKABLE))
         V3 = self.yade.Vector3
-        self.ids = O.bodies.append([utils.sphere(V3(*x), float(r), material=mat)
-                                    for x, r in zip(scene.x, scene.radius)])
+        self.ids = O.bodies.append([utils.sphere(V3(*x), float(r), material=mats[(E, nu, rho)])
+                                    for x, r, E, nu, rho in zip(scene.x, scene.radius, scene.young.tolist(),
+                                                                scene.poisson.tolist(), scene.density.tolist())])
         for b, m, I, v in zip(O.bodies, scene.mass, scene.inertia, scene.velocity):
             b.state.mass = float(m)  # per-particle density
             b.state.inertia = V3(I, I, I)
             b.state.vel = V3(*v)
             if scene.plane:
                 b.state.blockedDOFs = "zXY"
-        self.law = w.Law2_ScGeom6D_CohFrictPhys_CohesionMoment()
+        for i in scene.groups.get("fixed", []):
+            O.bodies[int(i)].state.blockedDOFs = "xyzXYZ"
+        if hertz:
+            e = float(scene.restitution)
+            self.law = w.Law2_ScGeom_MindlinPhys_Mindlin(calcEnergy=True)
+            ig2, ip2 = w.Ig2_Sphere_Sphere_ScGeom(), (w.Ip2_FrictMat_FrictMat_MindlinPhys(en=e, es=e) if e < 1
+                                                       else w.Ip2_FrictMat_FrictMat_MindlinPhys())
+        else:
+            self.law = w.Law2_ScGeom6D_CohFrictPhys_CohesionMoment()
         # bonds may join spheres that do not touch (diagonals of a lattice, gaps of a random
         # packing): YADE keeps an interaction only while it is within the detection range
         i, j = scene.bonds.T if len(scene.bonds) else (np.zeros(0, int),) * 2
@@ -89,6 +102,7 @@ class YadeBackend:
             w.NewtonIntegrator(damping=0.0),
             w.ForceResetter(),
             w.InsertionSortCollider([w.Bo1_Sphere_Aabb(aabbEnlargeFactor=self.detection)]),
+            w.InteractionLoop([ig2], [ip2], [self.law]) if hertz else
             w.InteractionLoop([w.Ig2_Sphere_Sphere_ScGeom6D(interactionDetectionFactor=self.detection)],
                               [w.Ip2_CohFrictMat_CohFrictMat_CohFrictPhys(setCohesionNow=False,
                                                                           setCohesionOnNewContacts=False)],
@@ -170,8 +184,12 @@ class YadeBackend:
         w = _rows(s.angVel for s in self._states)
         # the law's energy functions crash YADE before its first force evaluation (bonds are
         # built stress free); its shear energy divides by ks: bonds with ks = 0 are left out
-        elastic = 0.0
-        if self.O.iter > 0:
+        elastic, dissipated = 0.0, 0.0
+        if self.O.iter > 0 and self.scene.contact == "hertz_mindlin":
+            law = self.law
+            elastic = law.normElastEnergy() + law.shearEnergy
+            dissipated = law.normDampDissip + law.shearDampDissip + law.frictionDissipation
+        elif self.O.iter > 0:
             elastic = self.law.normElastEnergy()
             if self.scene.ks.min() > 0:
                 elastic += self.law.shearElastEnergy()
@@ -179,8 +197,7 @@ class YadeBackend:
                 elastic += sum(0.5 * i.phys.shearForce.squaredNorm() / i.phys.ks
                                for i in self.O.interactions if i.isReal and i.phys.ks > 0)
         kinetic = 0.5 * float(np.einsum("n,ni,ni->", m, v, v) + np.einsum("n,ni,ni->", I, w, w))
-        return {"kinetic": kinetic, "elastic": float(elastic),
-                "dissipated": 0.0}
+        return {"kinetic": kinetic, "elastic": float(elastic), "dissipated": float(dissipated)}
 
     def finalize(self) -> None:
         import __main__
