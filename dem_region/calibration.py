@@ -37,3 +37,136 @@ def square_kn(E: float, radius: float) -> tuple[float, float]:
 def square_density(rho: float) -> float:
     """Sphere density giving a square layer (t = 2r, area (2r)^2 per particle) density rho."""
     return rho * 8.0 / (4.0 / 3.0 * np.pi)
+
+
+# -- virtual tests on a bonded block (any engine) ----------------------------------------------
+
+import hashlib
+import json
+import os
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+
+@dataclass(frozen=True)
+class BlockResponse:
+    """Measured homogenised response of a bonded block: E (Pa), nu (-), and for a pull to
+    failure the peak stress (Pa); scale: the bond stiffness scale (-) it was measured at."""
+
+    E: float
+    nu: float
+    peak_stress: float = float("nan")
+    scale: float = 1.0
+
+
+def faces(scene, axis: int, tol: float = 0.5):
+    """(low, high) particle indices within tol * r of the block's two faces normal to ``axis``."""
+    x = scene.x[:, axis]
+    r = scene.radius
+    return np.flatnonzero(x <= x.min() + tol * r), np.flatnonzero(x >= x.max() - tol * r)
+
+
+def cross_section(scene, axis: int) -> float:
+    """Area (m^2) normal to ``axis`` covered by the packing (layer thickness 2r in 2D)."""
+    others = [a for a in range(3) if a != axis and (a != 2 or not scene.plane)]
+    d = 2 * float(np.median(scene.radius))
+    area = np.prod([np.ptp(scene.x[:, a]) + d for a in others])
+    return float(area * (d if scene.plane else 1.0))
+
+
+def virtual_tension(scene, engine: str = "yade", axis: int = 0, strain: float = 2e-4, to_failure: bool = False,
+                    damping: float = 0.6, periods: float = 12.0) -> BlockResponse:
+    """Quasi-static uniaxial tension of a bonded block in a DEM engine.
+
+    The face particles normal to ``axis`` are driven along ``axis`` only (free laterally, so
+    the block contracts as it likes); the far face moves by ``strain`` times the block length
+    on a smooth ramp and is then held, with Cundall damping ``damping``, until static.
+    E = (reaction / area) / strain; nu from the mid-length lateral contraction. With
+    to_failure, the pull continues to 2 x strain and peak_stress is the largest stress before
+    the first failure (the stress falling below 80 % of its running maximum): a perfectly
+    regular lattice fails everywhere at once and what is left could carry load again later.
+    """
+    from .backends import make_backend
+
+    lo, hi = faces(scene, axis)
+    test = replace(scene, local_damping=damping, velocity=np.zeros_like(scene.x), groups={})
+    eng = make_backend(engine, "in-process")
+    try:
+        eng.build(test)
+        dt = 0.5 * eng.critical_dt()
+        L = float(np.ptp(scene.x[:, axis]))
+        n_along = max(2, int(round(L / (2 * float(np.median(scene.radius))))))
+        # the block's axial period is about 2 n_along stable steps (times pi): ramp over a few
+        ramp = int(periods * np.pi * n_along * 2)
+        total = strain * L * (2.0 if to_failure else 1.0)  # to failure: twice the expected strain
+        steps = ramp * (2 if to_failure else 1)
+        speed = total / (steps * dt)
+        eng.prescribe(lo, "xyz"[axis])
+        eng.prescribe(hi, "xyz"[axis])
+        v_hi = np.zeros((len(hi), 3))
+        state = {"k": 0, "peak": 0.0, "failed": False}
+        area = cross_section(scene, axis)
+
+        def drive():
+            k = state["k"]
+            s = np.sin(np.pi * min(k, steps) / steps) ** 2 if k < steps else 0.0
+            v_hi[:, axis] = 2 * speed * s  # sin^2 ramp: mean speed over the ramp is `speed`
+            eng.set_velocities(lo, np.zeros((len(lo), 3)))
+            eng.set_velocities(hi, v_hi)
+            sigma = -float(eng.forces(hi)[:, axis].sum()) / area
+            if not state["failed"]:
+                state["failed"] = state["peak"] > 0 and sigma < 0.8 * state["peak"]
+                state["peak"] = max(state["peak"], sigma) if not state["failed"] else state["peak"]
+            state["k"] += 1
+
+        eng.set_dt(dt)
+        eng.start(drive)
+        for _ in range(steps + (0 if to_failure else ramp)):
+            eng.advance(drive)
+        x = eng.positions()
+        eps = (x[hi, axis].mean() - x[lo, axis].mean()) / (scene.x[hi, axis].mean() - scene.x[lo, axis].mean()) - 1
+        sigma = -float(eng.forces(hi)[:, axis].sum()) / area
+        lat = 1 if axis != 1 else 0
+        mid = np.abs(scene.x[:, axis] - scene.x[:, axis].mean()) < 0.25 * L
+        top = mid & (scene.x[:, lat] >= scene.x[mid, lat].max() - 0.5 * scene.radius)
+        bot = mid & (scene.x[:, lat] <= scene.x[mid, lat].min() + 0.5 * scene.radius)
+        h0 = scene.x[top, lat].mean() - scene.x[bot, lat].mean()
+        eps_lat = (x[top, lat].mean() - x[bot, lat].mean()) / h0 - 1
+        return BlockResponse(E=sigma / eps if not to_failure else float("nan"), nu=-eps_lat / eps,
+                             peak_stress=state["peak"] if to_failure else float("nan"))
+    finally:
+        eng.finalize()
+
+
+def cache_dir() -> Path:
+    return Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "femdem" / "calibration"
+
+
+def _key(scene, engine: str) -> str:
+    h = hashlib.sha1()
+    for a in (scene.x, scene.radius, scene.bonds, scene.kn / scene.kn.max(), scene.ks / scene.kn.max(), scene.density):
+        h.update(np.ascontiguousarray(a).tobytes())
+    h.update(f"{engine}|{scene.plane}".encode())
+    return h.hexdigest()[:20]
+
+
+def calibrate_modulus(scene, E_target: float, engine: str = "yade", use_cache: bool = True):
+    """Scale every bond stiffness of ``scene`` so that its block modulus is E_target (Pa).
+
+    The response of a bonded packing is linear in the bond stiffness scale, so one virtual
+    tension test fixes the scale; the result (E per unit scale, nu) is cached per packing,
+    bond pattern and engine under cache_dir(). Returns (calibrated scene, BlockResponse at
+    unit scale, cache hit)."""
+    path = cache_dir() / f"{_key(scene, engine)}.json"
+    hit = use_cache and path.exists()
+    if hit:
+        d = json.loads(path.read_text())
+        resp = BlockResponse(d["E"], d["nu"])
+    else:
+        resp = virtual_tension(scene, engine)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_suffix(".tmp")
+        tmp.write_text(json.dumps({"E": resp.E, "nu": resp.nu, "engine": engine}))
+        os.replace(tmp, path)
+    s = E_target / resp.E
+    return replace(scene, kn=scene.kn * s, ks=scene.ks * s), resp, hit

@@ -50,6 +50,8 @@ class DemScene:
     friction_deg: float = 0.0
     contact: str = "linear"
     restitution: float = 1.0
+    bond_strength: np.ndarray | float = np.inf  # (nb,) N, normal force at which a bond breaks (brittle)
+    local_damping: float = 0.0  # Cundall's non-viscous damping, only for quasi-static virtual tests
     velocity: np.ndarray | None = None
 
     def __post_init__(self):
@@ -70,6 +72,7 @@ class DemScene:
         self.ks = np.broadcast_to(np.asarray(self.ks, float), (nb,)).copy()
         self.part = np.zeros(n, int) if self.part is None else np.asarray(self.part, int)
         self.bond_family = np.zeros(nb, int) if self.bond_family is None else np.asarray(self.bond_family, int)
+        self.bond_strength = np.broadcast_to(np.asarray(self.bond_strength, float), (nb,)).copy()
         for name, ids in self.groups.items():
             ids = np.asarray(ids, int)
             if ids.size and (ids.min() < 0 or ids.max() >= n):
@@ -88,7 +91,7 @@ class DemScene:
         keep = ~(inside[self.bonds[:, 0]] & inside[self.bonds[:, 1]])
         kw = {k: v for k, v in self.__dict__.items()}
         kw.update(bonds=self.bonds[keep], kn=self.kn[keep], ks=self.ks[keep], bond_family=self.bond_family[keep],
-                  groups=dict(self.groups))
+                  bond_strength=self.bond_strength[keep], groups=dict(self.groups))
         return DemScene(**kw)
 
     def to_wire(self) -> dict:

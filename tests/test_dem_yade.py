@@ -46,3 +46,30 @@ def test_chung_ooi_3_restitution(femdem, material, e):
     assert code == 0
     assert_checks(s)
     assert s["energy"]["balance_error_rel"] < 0.01  # damping dissipation is booked, not lost
+
+
+@pytest.mark.parametrize("kind", ["square", "hexagonal"])
+def test_bonded_block_modulus_calibration(femdem, kind, tmp_path, monkeypatch):
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    code, s, _ = femdem("run", "bonded_block_modulus", "--set", f"packing.kind={kind}")
+    assert code == 0
+    assert_checks(s)
+    assert s["qoi"]["poisson"] == pytest.approx(1 / 3, abs=0.03)  # both lattices are isotropic, nu = 1/3
+    # the cache is used the second time and gives the same calibration
+    code, s2, _ = femdem("run", "bonded_block_modulus", "--set", f"packing.kind={kind}")
+    assert s2["qoi"]["uncalibrated_modulus"] == s["qoi"]["uncalibrated_modulus"]
+    assert list((tmp_path / "cache" / "femdem" / "calibration").glob("*.json"))
+
+
+def test_bond_strength(femdem, tmp_path, monkeypatch):
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    code, s, _ = femdem("run", "bond_strength")
+    assert code == 0
+    assert_checks(s)
+
+
+def test_bonded_beam_bending(femdem, tmp_path, monkeypatch):
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    code, s, _ = femdem("run", "bonded_beam_bending")
+    assert code == 0
+    assert_checks(s)

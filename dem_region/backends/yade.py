@@ -99,7 +99,7 @@ class YadeBackend:
         import yade.log
         yade.log.setLevel("NewtonIntegrator", yade.log.ERROR)
         O.engines = [
-            w.NewtonIntegrator(damping=0.0),
+            w.NewtonIntegrator(damping=float(scene.local_damping)),
             w.ForceResetter(),
             w.InsertionSortCollider([w.Bo1_Sphere_Aabb(aabbEnlargeFactor=self.detection)]),
             w.InteractionLoop([ig2], [ip2], [self.law]) if hertz else
@@ -109,12 +109,15 @@ class YadeBackend:
                               [self.law]),
             w.PyRunner(command=f"{_HOOK}()", iterPeriod=1, initRun=True),
         ]
-        for (i, j), kn, ks in zip(scene.bonds, scene.kn, scene.ks):
+        for (i, j), kn, ks, fb in zip(scene.bonds, scene.kn, scene.ks, scene.bond_strength):
             I = utils.createInteraction(int(i), int(j))
             ph = I.phys
             ph.kn, ph.ks = float(kn), float(ks)
             ph.cohesionBroken = False
-            ph.normalAdhesion = ph.shearAdhesion = _UNBREAKABLE
+            breakable = np.isfinite(fb)
+            ph.normalAdhesion = float(fb) if breakable else _UNBREAKABLE
+            ph.shearAdhesion = _UNBREAKABLE
+            ph.fragile = bool(breakable)  # brittle: the bond is gone once its normal force exceeds fb
             ph.unp = I.geom.penetrationDepth  # the initial configuration is stress free
         self.prescribed = np.zeros(0, int)
         self._states = [b.state for b in O.bodies]  # cached: attribute lookups dominate bulk access
@@ -140,15 +143,29 @@ class YadeBackend:
         self.O.step()
 
     # -- interface data ----------------------------------------------------------------------
-    def prescribe(self, ids: np.ndarray) -> None:
-        self.prescribed = np.asarray(ids, int)
-        for i in self.prescribed:
-            self.O.bodies[int(i)].state.blockedDOFs = "xyzXYZ"
+    def prescribe(self, ids: np.ndarray, dofs: str = "xyz") -> None:
+        """Slave the translations ``dofs`` of particles ``ids`` (all three and the rotations by
+        default); their other degrees of freedom stay dynamic."""
+        ids = np.asarray(ids, int)
+        self.prescribed = np.union1d(self.prescribed, ids) if dofs != "xyz" else ids
+        self._partial = getattr(self, "_partial", {})
+        blocked = dofs + ("XYZ" if dofs == "xyz" else ("zXY" if self.scene.plane else ""))
+        for i in ids.tolist():
+            self._states[i].blockedDOFs = "".join(sorted(set(blocked), key=blocked.index))
+            if dofs != "xyz":
+                self._partial[i] = ["xyz".index(c) for c in dofs]
 
     def set_velocities(self, ids: np.ndarray, v: np.ndarray) -> None:
-        V3, states = self.yade.Vector3, self._states
-        for i, (a, b, c) in zip(ids.tolist() if hasattr(ids, "tolist") else ids, np.asarray(v, float).tolist()):
-            states[i].vel = V3(a, b, c)
+        V3, states, partial = self.yade.Vector3, self._states, getattr(self, "_partial", {})
+        for i, vi in zip(ids.tolist() if hasattr(ids, "tolist") else ids, np.asarray(v, float).tolist()):
+            if i in partial:  # keep the dynamic components
+                cur = states[i].vel
+                vi = [vi[k] if k in partial[i] else cur[k] for k in range(3)]
+            states[i].vel = V3(vi[0], vi[1], vi[2])
+
+    def bond_count(self) -> int:
+        """Bonds still intact (brittle bonds are erased by YADE when they break)."""
+        return sum(1 for I in self.O.interactions if I.isReal and not getattr(I.phys, "cohesionBroken", True))
 
     def forces(self, ids: np.ndarray) -> np.ndarray:
         f = self.O.forces.f
