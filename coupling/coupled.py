@@ -36,6 +36,7 @@ class CoupledClock:
         self.m, self.dt = int(substeps), dt_fem
         self.dt_dem = dt_fem / self.m
         self.k = 0  # DEM steps whose forces have been handed over
+        self.interface_work = 0.0  # J, work of the tie forces on the FEM (internal to the system)
         self.inner = {"fem": 0.0, "interface": 0.0}
         self.snapshot: dict[str, float] = {}
         self.momentum_snapshot = np.zeros(3)
@@ -59,6 +60,7 @@ class CoupledClock:
             fem.state.v += self.dt * fem.state.a
         fem.state.v += self.dt_dem * f_tie / fem.m[:, None]
         fem.drift(self.dt_dem)
+        self.interface_work += self.dt_dem * float(np.vdot(f_tie, fem.state.v))
         t2 = clock()
         self.tie.follow(fem.state.v)
         self.k += 1
@@ -79,6 +81,7 @@ class CoupledClock:
         kin_fem = 0.5 * float(np.einsum("n,ni,ni->", fem.m, v_n, v_n))
         self.snapshot = {"kinetic": kin_fem + d["kinetic"], "internal": f["internal"] + d["elastic"] + self.tie.energy(),
                          "external_work": f["external_work"], "dissipated": f["dissipated"] + d["dissipated"]}
+        self.interface_work_snapshot = self.interface_work
 
     def step(self) -> None:
         """One FEM step = m DEM steps."""

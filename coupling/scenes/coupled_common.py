@@ -88,7 +88,9 @@ def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, st
     sim = Simulation(
         stages=clock.stages(), dt=dt, n_steps=n,
         history_every=every,
-        probes={}, energies=clock.energies,
+        probes={"interface_work": lambda: clock.interface_work_snapshot,
+                **{f"momentum_{c}": (lambda i=i: float(clock.momentum()[i])) for i, c in enumerate("xyz")}},
+        energies=clock.energies,
         counts={"fem_nodes": region.n_nodes, "fem_elements": region.n_elements, "particles": scene.n,
                 "bonds": len(scene.bonds), "interface_particles": len(itf.ids)},
         clock_info={"dt_fem": dt, "dt_dem": dt / m, "dt_stable_fem": dt_fem, "dt_stable_dem": dt_dem, "substeps": m},

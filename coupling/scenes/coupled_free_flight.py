@@ -71,7 +71,6 @@ def build(p: dict, mode: str, dem: str):
 
     sim, clock = coupled_simulation(p, fem, scene, dem, 1.0, history_every=p["output.history_every"] or 1,
                                   steps=p["run.steps"])
-    sim.probes.update({f"momentum_{c}": (lambda i=i: float(clock.momentum()[i])) for i, c in enumerate("xy")})
     return sim
 
 
