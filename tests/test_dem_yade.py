@@ -73,3 +73,61 @@ def test_bonded_beam_bending(femdem, tmp_path, monkeypatch):
     code, s, _ = femdem("run", "bonded_beam_bending")
     assert code == 0
     assert_checks(s)
+
+
+@pytest.mark.parametrize("process", ["in-process", "worker"])
+def test_engine_checkpoint_restore_is_bit_identical(tmp_path, process):
+    from dem_region import packing
+    from dem_region.backends import make_backend
+    from dem_region.scene import DemScene
+    r = 0.0005
+    x = packing.square_2d((0, 0), (20 * 2 * r, 5 * 2 * r), r)
+    bonds, fam = packing.square_bonds(x, r)
+    v = np.random.default_rng(0).normal(size=(len(x), 3)) * [0.1, 0.1, 0]
+    scene = DemScene(x, r, 2000.0, bonds, kn=np.where(fam, 1e6, 2e6), ks=0.0, plane=True, velocity=v)
+    eng = make_backend("yade", process)
+    try:
+        eng.build(scene)
+        eng.set_dt(0.5 * eng.critical_dt())
+        eng.start(None)
+        for _ in range(50):
+            eng.advance(None)
+        eng.checkpoint(tmp_path / "ck.yade.bz2")
+        for _ in range(50):
+            eng.advance(None)
+        straight = eng.positions()
+        eng.restore(tmp_path / "ck.yade.bz2")
+        for _ in range(50):
+            eng.advance(None)
+        assert np.array_equal(eng.positions(), straight)
+        assert not np.array_equal(straight, x)
+    finally:
+        eng.finalize()
+
+
+def test_broken_bonds_are_listed_where_the_block_fails():
+    """A bonded chain pulled at both ends with one weak bond breaks there, and only there."""
+    from dem_region.backends import make_backend
+    from dem_region.scene import DemScene
+    r, n = 0.001, 12
+    x = np.column_stack([2 * r * np.arange(n), np.zeros(n), np.zeros(n)])
+    bonds = np.column_stack([np.arange(n - 1), np.arange(1, n)])
+    strength = np.full(n - 1, np.inf)
+    strength[5] = 1.0  # N
+    eng = make_backend("yade")
+    try:
+        eng.build(DemScene(x, r, 2000.0, bonds, kn=1e6, ks=0.0, bond_strength=strength, plane=True))
+        ends = np.array([0, n - 1])
+        eng.prescribe(ends)
+        eng.set_dt(0.2 * eng.critical_dt())
+        pull = lambda: eng.set_velocities(ends, np.array([[-0.05, 0, 0], [0.05, 0, 0]]))
+        eng.start(pull)
+        assert eng.bond_state()["broken"] == 0
+        for _ in range(3000):
+            eng.advance(pull)
+        s = eng.bond_state()
+        assert s["broken"] == 1 and s["intact"] == n - 2
+        i, j, t, bx, *_ = s["broken_list"][0]
+        assert (i, j) == (5, 6) and t > 0 and abs(bx - 11 * r) < 2 * r
+    finally:
+        eng.finalize()

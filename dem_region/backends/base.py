@@ -57,4 +57,13 @@ class DemBackend(Protocol):
     def energies(self) -> dict[str, float]:
         """{kinetic, elastic, dissipated} J, as far as the engine reports them."""
 
+    def bond_state(self) -> dict:
+        """{intact, broken, broken_list}: counts and rows (i, j, t, x, y, z) of broken bonds."""
+
+    def checkpoint(self, path) -> None:
+        """Save the engine state to ``path`` (the engine's own restart format), atomically."""
+
+    def restore(self, path) -> None:
+        """Continue from a checkpoint: the next ``advance`` is the one that followed it."""
+
     def finalize(self) -> None: ...

@@ -128,6 +128,15 @@ class RemoteBackend:
     def energies(self) -> dict[str, float]:
         return self._call("call", "energies")[1]
 
+    def bond_state(self) -> dict:
+        return self._call("call", "bond_state")[1]
+
+    def checkpoint(self, path) -> None:
+        self._call("call", "checkpoint", str(path))
+
+    def restore(self, path) -> None:
+        self._call("call", "restore", str(path))
+
     def finalize(self) -> None:
         if self.proc.poll() is None:
             try:

@@ -167,6 +167,23 @@ class YadeBackend:
         """Bonds still intact (brittle bonds are erased by YADE when they break)."""
         return sum(1 for I in self.O.interactions if I.isReal and not getattr(I.phys, "cohesionBroken", True))
 
+    def bond_state(self) -> dict:
+        """{intact, broken, broken_list}: broken_list rows (i, j, t s, x, y, z m) of every bond
+        found broken since build, with the time and mid-point of the call that found it
+        (call at output steps: the time resolution is the caller's)."""
+        if not hasattr(self, "_broken"):
+            self._broken: list[tuple] = []
+        alive = {(min(I.id1, I.id2), max(I.id1, I.id2)) for I in self.O.interactions
+                 if I.isReal and not getattr(I.phys, "cohesionBroken", True)}
+        known = {(i, j) for i, j, *_ in self._broken}
+        x = None
+        for i, j in map(tuple, np.sort(self.scene.bonds, axis=1).tolist()):
+            if (i, j) not in alive and (i, j) not in known:
+                x = self.positions() if x is None else x
+                mid = 0.5 * (x[i] + x[j])
+                self._broken.append((i, j, float(self.O.time), *mid.tolist()))
+        return {"intact": len(alive), "broken": len(self._broken), "broken_list": list(self._broken)}
+
     def forces(self, ids: np.ndarray) -> np.ndarray:
         f = self.O.forces.f
         return _rows(map(f, np.asarray(ids, int).tolist()))
@@ -215,6 +232,27 @@ class YadeBackend:
                                for i in self.O.interactions if i.isReal and i.phys.ks > 0)
         kinetic = 0.5 * float(np.einsum("n,ni,ni->", m, v, v) + np.einsum("n,ni,ni->", I, w, w))
         return {"kinetic": kinetic, "elastic": float(elastic), "dissipated": float(dissipated)}
+
+    # -- checkpoint ----------------------------------------------------------------------------
+    def checkpoint(self, path) -> None:
+        """Save the whole engine state (YADE's own format), atomically: a kill mid-write
+        leaves the previous checkpoint intact."""
+        path = str(path)
+        tmp = path + ".tmp.yade.bz2"
+        self.O.save(tmp)
+        os.replace(tmp, path)
+
+    def restore(self, path) -> None:
+        """Load a checkpoint and recompute the forces at its positions (YADE does not save the
+        force container, which the next move needs): the continuation is bit-identical."""
+        self.O.load(str(path))
+        self._states = [b.state for b in self.O.bodies]
+        self.law = self.O.engines[3].lawDispatcher.functors[0]
+        between, self._between = self._between, None
+        dt, self.O.dt = self.O.dt, 0.0
+        self.O.step()
+        self.O.dt = dt
+        self._between = between
 
     def finalize(self) -> None:
         import __main__
