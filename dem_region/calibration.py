@@ -170,3 +170,78 @@ def calibrate_modulus(scene, E_target: float, engine: str = "yade", use_cache: b
         os.replace(tmp, path)
     s = E_target / resp.E
     return replace(scene, kn=scene.kn * s, ks=scene.ks * s), resp, hit
+
+
+def virtual_shear(scene, engine: str = "yade", gamma: float = 2e-4, damping: float = 0.6,
+                  periods: float = 12.0) -> float:
+    """Shear modulus G (Pa) of a bonded layer from a quasi-static simple shear test: every
+    boundary particle follows the affine field u_x = gamma (y - y0), the interior relaxes
+    with Cundall damping; G = (force on the top face along x / its area) / gamma."""
+    from .backends import make_backend
+
+    x = scene.x
+    r = float(np.median(scene.radius))
+    y0, y1 = x[:, 1].min(), x[:, 1].max()
+    x0, x1 = x[:, 0].min(), x[:, 0].max()
+    edge = (x[:, 1] < y0 + 0.5 * r) | (x[:, 1] > y1 - 0.5 * r) | (x[:, 0] < x0 + 0.5 * r) | (x[:, 0] > x1 - 0.5 * r)
+    boundary, top = np.flatnonzero(edge), np.flatnonzero(x[:, 1] > y1 - 0.5 * r)
+    eng = make_backend(engine, "in-process")
+    try:
+        eng.build(replace(scene, local_damping=damping, velocity=np.zeros_like(x), groups={}))
+        dt = 0.5 * eng.critical_dt()
+        n = max(2, int(round(max(x1 - x0, y1 - y0) / (2 * r))))
+        ramp = int(periods * np.pi * n * 2)
+        eng.prescribe(boundary)
+        v = np.zeros((len(boundary), 3))
+        k = [0]
+
+        def drive():
+            s = 2 * np.sin(np.pi * min(k[0], ramp) / ramp) ** 2 if k[0] < ramp else 0.0
+            v[:, 0] = gamma / (ramp * dt) * s * (x[boundary, 1] - y0)
+            eng.set_velocities(boundary, v)
+            k[0] += 1
+
+        eng.set_dt(dt)
+        eng.start(drive)
+        for _ in range(2 * ramp):
+            eng.advance(drive)
+        xs = eng.positions()
+        g = (xs[top, 0] - x[top, 0]).mean() / (y1 - y0)
+        area = (x1 - x0 + 2 * r) * (2 * r if scene.plane else np.ptp(x[:, 2]) + 2 * r)
+        return -float(eng.forces(top)[:, 0].sum()) / area / g
+    finally:
+        eng.finalize()
+
+
+def calibrate_orthotropic(scene, E1: float, E2: float, engine: str = "yade", axis1: int = 0):
+    """Direction-dependent bond stiffness for a ply layer: bonds along ``axis1`` (the fibre)
+    and across it are scaled separately so that tension tests give E1 along the fibre and E2
+    across it; diagonal bonds keep the scale of an isotropic calibration to E2.
+
+    For a lattice the modulus along a direction is linear in the scale of the bonds along it
+    when the other scale is held (E1 = C11 - C12^2 / C22, only C11 depends on them), so two
+    tests per direction fix each scale; the two directions are coupled through C12^2 / C22,
+    so the pair is iterated (three rounds: the coupling is weak). Returns (scene, measured
+    (E1, E2) after calibration)."""
+    base, _, _ = calibrate_modulus(scene, E2, engine)
+    dx = base.x[base.bonds[:, 1]] - base.x[base.bonds[:, 0]]
+    u = np.abs(dx) / np.linalg.norm(dx, axis=1)[:, None]
+    along = u[:, axis1] > 1 - 1e-9
+    across = (u.max(axis=1) > 1 - 1e-9) & ~along
+    axis2 = [a for a in (0, 1) if a != axis1][0]
+
+    def with_scales(s1, s2):
+        f = np.where(along, s1, np.where(across, s2, 1.0))
+        return replace(base, kn=base.kn * f, ks=base.ks * f)
+
+    scales = [1.0, 1.0]
+    for _ in range(3):
+        for axis, target, sel in ((axis1, E1, 0), (axis2, E2, 1)):
+            trial = list(scales)
+            trial[sel] = 1.0
+            E_a = virtual_tension(with_scales(*trial), engine, axis).E
+            trial[sel] = 2.0
+            slope = virtual_tension(with_scales(*trial), engine, axis).E - E_a
+            scales[sel] = 1.0 + (target - E_a) / slope
+    out = with_scales(*scales)
+    return out, (virtual_tension(out, engine, axis1).E, virtual_tension(out, engine, axis2).E)

@@ -104,3 +104,44 @@ def neighbour_bonds(x: np.ndarray, radius: np.ndarray, tol: float = 1e-6) -> np.
         return pairs
     gap = np.linalg.norm(x[pairs[:, 0]] - x[pairs[:, 1]], axis=1) - radius[pairs].sum(axis=1)
     return pairs[gap <= tol * radius[pairs].sum(axis=1)]
+
+
+def laminate_layers(ply_thickness: float, n_plies: int, length: float, radius: float):
+    """Square-lattice layer of a laminate in the x-y plane (y through the thickness) whose rows
+    never straddle a ply boundary: ply_thickness must be a whole number of spacings 2r.
+
+    Returns (x (n, 3), ply (n,), bonds (nb, 2), family (nb,)) with family 0 = axial and 1 =
+    diagonal bonds inside a ply, 2 = bonds that cross a ply interface (the interlaminar bonds).
+    """
+    d = 2.0 * radius
+    rows = ply_thickness / d
+    if abs(rows - round(rows)) > 1e-9 * rows or round(rows) < 1:
+        raise ValueError(f"ply thickness {ply_thickness:g} m is not a whole number of particle diameters {d:g} m")
+    rows = int(round(rows))
+    x = square_2d((0.0, 0.5 * d), (length, n_plies * ply_thickness - 0.5 * d), radius)
+    ply = np.minimum((x[:, 1] // ply_thickness).astype(int), n_plies - 1)
+    bonds, family = square_bonds(x, radius)
+    family = np.where(ply[bonds[:, 0]] != ply[bonds[:, 1]], 2, family)
+    return x, ply, bonds, family
+
+
+def fill_elements(mesh, elements: np.ndarray, r_mean: float, r_spread: float = 0.2, seed: int = 0,
+                  attempts: int = 200_000) -> tuple[np.ndarray, np.ndarray]:
+    """Random dense quasi-2D packing of the union of 2D FEM ``elements`` of a scikit-fem mesh:
+    spheres placed in the elements' bounding box, kept where the whole sphere lies inside the
+    union (its centre and four rim points in those elements). Returns (x (n, 3), radii (n,))."""
+    elements = np.asarray(elements, int)
+    pts = mesh.p[:, mesh.t[:, elements]].reshape(2, -1)
+    x, r = random_dense(pts.min(axis=1), pts.max(axis=1), r_mean, r_spread, attempts, seed, plane=True)
+    finder = mesh.element_finder()
+    keep = np.ones(len(x), bool)
+    for dx, dy in ((0, 0), (1, 0), (-1, 0), (0, 1), (0, -1)):
+        q = x[:, :2] + np.column_stack([dx * r, dy * r]) * (1 - 1e-9)
+        inside = np.zeros(len(x), bool)
+        for k, (a, b) in enumerate(q):
+            try:
+                inside[k] = finder(np.array([a]), np.array([b]))[0] in set(elements.tolist())
+            except ValueError:
+                inside[k] = False
+        keep &= inside
+    return x[keep], r[keep]

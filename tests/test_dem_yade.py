@@ -131,3 +131,46 @@ def test_broken_bonds_are_listed_where_the_block_fails():
         assert (i, j) == (5, 6) and t > 0 and abs(bx - 11 * r) < 2 * r
     finally:
         eng.finalize()
+
+
+def test_virtual_shear_of_an_isotropic_lattice(tmp_path, monkeypatch):
+    """The calibrated square layer is isotropic: G = E / (2 (1 + nu)) with nu = 1/3."""
+    from dem_region import calibration
+    from coupling.scenes.bonded_block import layer
+    from coupling.case import load_case
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    p = dict(load_case("bonded_block_modulus").parameters, **{"geometry.columns": 20, "geometry.rows": 20})
+    scene, unit, _ = calibration.calibrate_modulus(layer(p), p["material.E"])
+    G = calibration.virtual_shear(scene)
+    assert G == pytest.approx(p["material.E"] / (2 * (1 + unit.nu)), rel=0.05)
+
+
+def test_orthotropic_ply_calibration(tmp_path, monkeypatch):
+    """A ply layer calibrated to E11 / E22 of the seed paper's graphite/epoxy (Table 1)."""
+    from dem_region import calibration
+    from coupling.scenes.bonded_block import layer
+    from coupling.case import load_case
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    p = dict(load_case("bonded_block_modulus").parameters, **{"geometry.columns": 24, "geometry.rows": 12})
+    E11, E22 = 156e9, 9.09e9
+    _, (e1, e2) = calibration.calibrate_orthotropic(layer(p), E11, E22)
+    assert e1 == pytest.approx(E11, rel=0.05) and e2 == pytest.approx(E22, rel=0.05)
+
+
+def test_ply_aware_layers_and_filled_elements():
+    from dem_region import packing
+    from fem_region import mesh
+    r = 0.0005
+    x, ply, bonds, fam = packing.laminate_layers(4 * r * 2, 3, 20 * 2 * r, r)
+    assert np.bincount(ply).tolist() == [4 * 21] * 3  # 4 rows of 21 per ply
+    inter = bonds[fam == 2]
+    assert (ply[inter[:, 0]] != ply[inter[:, 1]]).all()
+    assert len(inter) == 2 * (21 + 2 * 20)  # per interface: 21 axial + 2 x 20 diagonal
+    with pytest.raises(ValueError):
+        packing.laminate_layers(3.5 * r, 2, 0.01, r)
+    m = mesh.rectangle(np.linspace(0, 0.02, 5), np.linspace(0, 0.01, 3))
+    xs, rs = packing.fill_elements(m, np.array([1, 2]), 0.0004, attempts=20000)
+    fraction = np.sum(np.pi * rs**2) / (2 * 0.005 * 0.005)
+    assert 0.3 < fraction < 0.6  # random sequential addition in 2D jams near 0.55
+    finder = m.element_finder()
+    assert all(finder(np.array([a]), np.array([b]))[0] in (1, 2) for a, b in xs[:, :2])
