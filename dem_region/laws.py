@@ -1,0 +1,96 @@
+"""Bond laws that the coupling layer can evaluate on any engine's bonds (vectorised over bonds).
+
+HashinCohesiveLaw: the seed paper's interlaminar bond. Quadratic (Hashin) initiation with
+normal strength Z0 and shear strength R0, no damage under compression; linear softening
+whose area is the critical energy release rate, mixed mode by Benzeggagh-Kenane or the power
+law; irreversible damage; under compression the normal penalty stays (impenetrability).
+Written in the mixed-mode bilinear form of Camanho & Davila (NASA/TM-2002-211737) with one
+penalty stiffness K for both modes, which is the seed's mu = Z0^2 h / (2 Gc) softening
+(the slope in terms of the equivalent strain over an interface layer of thickness h).
+
+Units: separations m, tractions Pa, K Pa/m, strengths Pa, toughness J/m^2. A bond that
+stands for an interface area A carries the force A t.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+MIXED_MODE = ("bk", "power")
+
+
+@dataclass(frozen=True)
+class HashinCohesiveLaw:
+    """K: penalty stiffness (Pa/m); Z0, R0: normal and shear strength (Pa); GIc, GIIc:
+    toughness (J/m^2); eta: B-K (or power-law) exponent; mixed_mode: "bk" | "power"."""
+
+    K: float
+    Z0: float
+    R0: float
+    GIc: float
+    GIIc: float
+    eta: float = 2.284
+    mixed_mode: str = "bk"
+
+    def __post_init__(self):
+        if self.mixed_mode not in MIXED_MODE:
+            raise ValueError(f"mixed_mode {self.mixed_mode!r}: allowed {MIXED_MODE}")
+        for name in ("K", "Z0", "R0", "GIc", "GIIc", "eta"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"{name} = {getattr(self, name)!r}: must be > 0")
+        if self.GIc < self.Z0**2 / (2 * self.K) or self.GIIc < self.R0**2 / (2 * self.K):
+            raise ValueError("toughness below the elastic energy at initiation: raise K or Gc "
+                             "(needs Gc >= strength^2 / (2 K))")
+
+    def toughness(self, B: np.ndarray) -> np.ndarray:
+        """Mixed-mode Gc (J/m^2) at mode ratio B = GII / (GI + GII)."""
+        B = np.asarray(B, float)
+        if self.mixed_mode == "bk":
+            return self.GIc + (self.GIIc - self.GIc) * B**self.eta
+        # power law (GI/GIc)^eta + (GII/GIIc)^eta = 1 with GI = (1 - B) G, GII = B G
+        return 1.0 / (((1 - B) / self.GIc) ** self.eta + (B / self.GIIc) ** self.eta) ** (1.0 / self.eta)
+
+    def onset_and_final(self, dn: np.ndarray, ds: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(equivalent separation at onset, at full decohesion, mode ratio B) for the
+        current mode mix; dn opening (m), ds shear slip magnitude (m)."""
+        K = self.K
+        n0, s0 = self.Z0 / K, self.R0 / K
+        open_ = dn > 0
+        beta = np.where(open_, ds / np.where(open_, dn, 1.0), np.inf)
+        with np.errstate(invalid="ignore", over="ignore"):
+            b2 = np.where(open_, beta**2, 0.0)
+            m0 = np.where(open_, n0 * s0 * np.sqrt((1 + b2) / (s0**2 + b2 * n0**2)), s0)
+            B = np.where(open_, b2 / (1 + b2), 1.0)
+        Gc = np.where(open_, self.toughness(B), self.GIIc)
+        mf = 2 * Gc / (K * m0)
+        return m0, mf, B
+
+    def tractions(self, dn: np.ndarray, ds: np.ndarray, damage: np.ndarray):
+        """Tractions for separations dn (n,) opening m and ds (n, k) slip m, given the
+        damage reached so far (n,); returns (t_n (n,), t_s (n, k), new damage (n,)).
+
+        Damage never decreases; compression (dn < 0) keeps the full normal penalty."""
+        dn = np.asarray(dn, float)
+        ds = np.asarray(ds, float).reshape(len(dn), -1)
+        slip = np.linalg.norm(ds, axis=1)
+        m = np.sqrt(np.maximum(dn, 0.0) ** 2 + slip**2)
+        m0, mf, _ = self.onset_and_final(dn, slip)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            d_now = np.where(m > m0, mf * (m - m0) / (m * (mf - m0)), 0.0)
+        d = np.clip(np.maximum(damage, np.nan_to_num(d_now)), 0.0, 1.0)
+        tn = np.where(dn > 0, (1 - d) * self.K * dn, self.K * dn)
+        ts = ((1 - d) * self.K)[:, None] * ds
+        return tn, ts, d
+
+    def failed(self, damage: np.ndarray) -> np.ndarray:
+        return np.asarray(damage) >= 1.0
+
+
+def friction_traction(tn: np.ndarray, slip_rate: np.ndarray, mu: float, v_reg: float) -> np.ndarray:
+    """Coulomb friction (n, k) Pa on failed, closed interfaces: mu |t_n| against the slip
+    rate (n, k) m/s, regularised over v_reg m/s so it is continuous at stick."""
+    p = np.maximum(-np.asarray(tn, float), 0.0)
+    rate = np.asarray(slip_rate, float)
+    speed = np.sqrt(np.sum(rate**2, axis=1) + v_reg**2)
+    return -(mu * p / speed)[:, None] * rate

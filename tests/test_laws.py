@@ -1,0 +1,77 @@
+"""Interlaminar cohesive law: closed forms of a single bond (energy, initiation, irreversibility)."""
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+from dem_region.laws import HashinCohesiveLaw, friction_traction
+
+# AS4/PEEK (VALIDATION.md: Camanho & Davila / Turon), penalty 1e14 Pa/m
+AS4 = HashinCohesiveLaw(K=1e14, Z0=80e6, R0=100e6, GIc=969.0, GIIc=1719.0, eta=2.284)
+
+
+def dissipate(law, direction, n=20000):
+    """Drive one bond along a proportional path (dn, ds) = s * direction to full decohesion;
+    returns (work J/m^2, peak tractions, damage)."""
+    a, b = direction
+    m0, mf, _ = law.onset_and_final(np.array([a]), np.array([abs(b)]))
+    s = np.linspace(0, 1.2 * mf[0] / np.hypot(max(a, 0), b), n)
+    d = np.zeros(1)
+    work, prev, peak = 0.0, (0.0, 0.0), (0.0, 0.0)
+    for k in range(1, n):
+        tn, ts, d = law.tractions(np.array([a * s[k]]), np.array([[b * s[k]]]), d)
+        cur = (tn[0], ts[0, 0])
+        ds_ = s[k] - s[k - 1]
+        work += 0.5 * ((prev[0] + cur[0]) * a + (prev[1] + cur[1]) * b) * ds_
+        if np.hypot(*cur) > np.hypot(*peak):
+            peak = cur
+        prev = cur
+    return work, peak, d[0]
+
+
+@pytest.mark.parametrize("direction, G", [((1.0, 0.0), 969.0), ((0.0, 1.0), 1719.0)])
+def test_pure_modes_dissipate_their_toughness(direction, G):
+    work, peak, d = dissipate(AS4, direction)
+    assert d == 1.0
+    assert work == pytest.approx(G, rel=1e-3)
+    assert np.hypot(*peak) == pytest.approx(80e6 if direction[0] else 100e6, rel=1e-3)
+
+
+@settings(max_examples=20, deadline=None)
+@given(beta=st.floats(0.05, 20.0), Z0=st.floats(10e6, 100e6), R0=st.floats(10e6, 100e6),
+       GIc=st.floats(100.0, 2000.0), ratio=st.floats(1.0, 4.0), mode=st.sampled_from(["bk", "power"]))
+def test_mixed_mode_dissipation_and_initiation(beta, Z0, R0, GIc, ratio, mode):
+    """Proportional mixed-mode loading dissipates Gc(B) of the chosen criterion, and the
+    traction at onset satisfies Hashin's quadratic criterion."""
+    law = HashinCohesiveLaw(K=1e14, Z0=Z0, R0=R0, GIc=GIc, GIIc=ratio * GIc, mixed_mode=mode)
+    work, peak, d = dissipate(law, (1.0, beta), n=6000)
+    B = beta**2 / (1 + beta**2)
+    assert d == 1.0
+    assert work == pytest.approx(float(law.toughness(B)), rel=5e-3)
+    assert (peak[0] / Z0) ** 2 + (peak[1] / R0) ** 2 == pytest.approx(1.0, rel=5e-3)
+
+
+def test_bk_limits_and_compression():
+    assert AS4.toughness(0.0) == pytest.approx(969.0) and AS4.toughness(1.0) == pytest.approx(1719.0)
+    # compression: the normal penalty stays, no damage from pressure alone
+    tn, ts, d = AS4.tractions(np.array([-1e-6]), np.array([[0.0]]), np.zeros(1))
+    assert tn[0] == pytest.approx(-1e8) and d[0] == 0.0
+
+
+def test_damage_is_irreversible_and_unloading_is_secant():
+    dn = np.array([1.5 * 80e6 / 1e14])  # past onset
+    _, _, d = AS4.tractions(dn, np.zeros((1, 1)), np.zeros(1))
+    assert 0 < d[0] < 1
+    tn_back, _, d_back = AS4.tractions(0.5 * dn, np.zeros((1, 1)), d)  # unload halfway
+    assert d_back[0] == d[0] and tn_back[0] == pytest.approx((1 - d[0]) * 1e14 * 0.5 * dn[0])
+
+
+def test_bad_parameters_are_refused():
+    with pytest.raises(ValueError):
+        HashinCohesiveLaw(K=1e10, Z0=80e6, R0=100e6, GIc=1.0, GIIc=2.0)  # Gc below strength^2 / 2K
+    with pytest.raises(ValueError):
+        HashinCohesiveLaw(K=1e14, Z0=80e6, R0=100e6, GIc=969.0, GIIc=1719.0, mixed_mode="linear")
+
+
+def test_friction_opposes_slip_and_needs_contact():
+    f = friction_traction(np.array([-10e6, 5e6]), np.array([[0.2], [0.2]]), 0.3, 1e-6)
+    assert f[0, 0] == pytest.approx(-0.3 * 10e6, rel=1e-6) and f[1, 0] == 0.0
