@@ -18,6 +18,18 @@ class ElasticBond:
     name: str = "elastic"
 
 
+@dataclass(frozen=True)
+class Wall:
+    """A fixed rigid plane normal to global ``axis`` (0, 1, 2) at ``position`` (m), acting on
+    the side ``sense`` (+1: particles above it, -1: below, 0: both). Rigid impactors and
+    clamps are particles: an impactor is a large sphere with its own mass and velocity, a
+    clamp is a group of prescribed particles."""
+
+    axis: int
+    position: float
+    sense: int = 0
+
+
 @dataclass
 class DemScene:
     """Particles, bonds and named groups of a damage zone.
@@ -51,6 +63,7 @@ class DemScene:
     contact: str = "linear"
     restitution: float = 1.0
     bond_strength: np.ndarray | float = np.inf  # (nb,) N, normal force at which a bond breaks (brittle)
+    walls: list = field(default_factory=list)  # rigid planes: Wall(axis, position, sense)
     local_damping: float = 0.0  # Cundall's non-viscous damping, only for quasi-static virtual tests
     velocity: np.ndarray | None = None
 
@@ -63,6 +76,8 @@ class DemScene:
             raise ValueError(f"contact {self.contact!r}: allowed linear, hertz_mindlin")
         if self.contact == "hertz_mindlin" and len(self.bonds):
             raise ValueError("bonded scenes use the linear contact law")
+        if self.walls and self.contact != "hertz_mindlin":
+            raise ValueError("walls are available with the hertz_mindlin contact family")
         self.x = np.asarray(self.x, float).reshape(n, 3)
         self.radius = np.broadcast_to(np.asarray(self.radius, float), (n,)).copy()
         self.density = np.broadcast_to(np.asarray(self.density, float), (n,)).copy()
@@ -105,6 +120,8 @@ class DemScene:
                 out[k] = {g: ("ndarray", a.dtype.str, a.shape, a.tobytes()) for g, a in v.items()}
             elif k == "laws":
                 out[k] = [type(law).__name__ for law in v]
+            elif k == "walls":
+                out[k] = [(w.axis, w.position, w.sense) for w in v]
             else:
                 out[k] = v
         return out
@@ -115,6 +132,7 @@ class DemScene:
         kw = {k: (arr(v) if isinstance(v, tuple) and v and v[0] == "ndarray" else v) for k, v in d.items()}
         kw["groups"] = {g: arr(t) for g, t in d["groups"].items()}
         kw["laws"] = [ElasticBond() for _ in d["laws"]]
+        kw["walls"] = [Wall(*w) for w in d.get("walls", [])]
         return cls(**kw)
 
     @property

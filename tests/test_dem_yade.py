@@ -174,3 +174,32 @@ def test_ply_aware_layers_and_filled_elements():
     assert 0.3 < fraction < 0.6  # random sequential addition in 2D jams near 0.55
     finder = m.element_finder()
     assert all(finder(np.array([a]), np.array([b]))[0] in (1, 2) for a, b in xs[:, :2])
+
+
+def test_sphere_on_a_wall(femdem):
+    """A rigid wall of the neutral scene: elastic rebound (restitution 1) and Hertz contact.
+    YADE's wall geometry hands Mindlin a contact radius of R/2 (not the plane's R), which is
+    why chung_ooi_2 stands a large fixed sphere in for the plane; here the closed form with
+    R* = R/2 is what the engine must match."""
+    from dem_region.backends import make_backend
+    from dem_region.scene import DemScene, Wall
+    from coupling.scenes.chung_ooi import hertz
+    E, nu, rho, R, v = 70e9, 0.3, 2699.0, 0.1, 0.2
+    scene = DemScene(np.array([[0, 0, R * (1 + 1e-6)]]), R, rho, np.zeros((0, 2)), 0.0, 0.0, young=E, poisson=nu,
+                     contact="hertz_mindlin", velocity=[[0, 0, -v]], walls=[Wall(2, 0.0, 1)])
+    ref = hertz({"material.E": E, "material.poisson": nu, "material.rho": rho, "particle.radius": R,
+                 "impact.velocity": v, "plane.radius_ratio": 1.0, "plane.stiffness_ratio": 1e6}, 2)
+    eng = make_backend("yade")
+    try:
+        eng.build(scene)
+        eng.set_dt(ref["contact_duration"] / 400)
+        eng.start(None)
+        F = []
+        for _ in range(600):
+            eng.advance(None)
+            F.append(eng.forces([0])[0, 2])
+        assert max(F) == pytest.approx(ref["peak_force"], rel=0.01)
+        assert eng.velocities()[0, 2] == pytest.approx(v, rel=1e-3)
+        assert eng.positions().shape == (1, 3)
+    finally:
+        eng.finalize()

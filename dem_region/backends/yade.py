@@ -83,11 +83,16 @@ class YadeBackend:
                 b.state.blockedDOFs = "zXY"
         for i in scene.groups.get("fixed", []):
             O.bodies[int(i)].state.blockedDOFs = "xyzXYZ"
+        if scene.walls:  # rigid planes: a stiff material so that E* = E / (1 - nu^2) of the particle
+            wmat = O.materials.append(w.FrictMat(young=1e6 * float(scene.young.max()), poisson=float(scene.poisson[0]),
+                                                 density=1.0, frictionAngle=np.radians(scene.friction_deg)))
+            self.wall_ids = O.bodies.append([utils.wall(wl.position, axis=wl.axis, sense=wl.sense, material=wmat)
+                                             for wl in scene.walls])
         if hertz:
             e = float(scene.restitution)
             self.law = w.Law2_ScGeom_MindlinPhys_Mindlin(calcEnergy=True)
-            ig2, ip2 = w.Ig2_Sphere_Sphere_ScGeom(), (w.Ip2_FrictMat_FrictMat_MindlinPhys(en=e, es=e) if e < 1
-                                                       else w.Ip2_FrictMat_FrictMat_MindlinPhys())
+            ig2 = [w.Ig2_Sphere_Sphere_ScGeom(), w.Ig2_Wall_Sphere_ScGeom()]
+            ip2 = (w.Ip2_FrictMat_FrictMat_MindlinPhys(en=e, es=e) if e < 1 else w.Ip2_FrictMat_FrictMat_MindlinPhys())
         else:
             self.law = w.Law2_ScGeom6D_CohFrictPhys_CohesionMoment()
         # bonds may join spheres that do not touch (diagonals of a lattice, gaps of a random
@@ -101,8 +106,8 @@ class YadeBackend:
         O.engines = [
             w.NewtonIntegrator(damping=float(scene.local_damping)),
             w.ForceResetter(),
-            w.InsertionSortCollider([w.Bo1_Sphere_Aabb(aabbEnlargeFactor=self.detection)]),
-            w.InteractionLoop([ig2], [ip2], [self.law]) if hertz else
+            w.InsertionSortCollider([w.Bo1_Sphere_Aabb(aabbEnlargeFactor=self.detection), w.Bo1_Wall_Aabb()]),
+            w.InteractionLoop(ig2, [ip2], [self.law]) if hertz else
             w.InteractionLoop([w.Ig2_Sphere_Sphere_ScGeom6D(interactionDetectionFactor=self.detection)],
                               [w.Ip2_CohFrictMat_CohFrictMat_CohFrictPhys(setCohesionNow=False,
                                                                           setCohesionOnNewContacts=False)],
@@ -120,7 +125,8 @@ class YadeBackend:
             ph.fragile = bool(breakable)  # brittle: the bond is gone once its normal force exceeds fb
             ph.unp = I.geom.penetrationDepth  # the initial configuration is stress free
         self.prescribed = np.zeros(0, int)
-        self._states = [b.state for b in O.bodies]  # cached: attribute lookups dominate bulk access
+        # cached (attribute lookups dominate bulk access); particles only, walls come after them
+        self._states = [b.state for b in O.bodies][: scene.n]
 
     def critical_dt(self) -> float:
         return self.scene.critical_dt()
@@ -246,7 +252,7 @@ class YadeBackend:
         """Load a checkpoint and recompute the forces at its positions (YADE does not save the
         force container, which the next move needs): the continuation is bit-identical."""
         self.O.load(str(path))
-        self._states = [b.state for b in self.O.bodies]
+        self._states = [b.state for b in self.O.bodies][: self.scene.n]
         self.law = self.O.engines[3].lawDispatcher.functors[0]
         between, self._between = self._between, None
         dt, self.O.dt = self.O.dt, 0.0
