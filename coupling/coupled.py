@@ -53,7 +53,7 @@ class CoupledClock:
         f_tie = self.f_tie = self.tie.fast_force(fem.region.X + fem.state.u)
         t1 = clock()
         if self.k % self.m == 0:
-            fem.compute_forces()  # the FEM's own forces at t_n (f_coupling stays zero)
+            fem.compute_forces()  # the FEM's own forces at t_n
             n = self.k // self.m
             if n % self.snapshot_every == 0 or n == self.last_window:
                 self._snapshot(f_tie)

@@ -95,6 +95,14 @@ def positive(default: float, doc: str, unit: str) -> Param:
     return Param(default, doc, "float", unit, low=0.0, open_low=True)
 
 
+def isotropic_material(E: float, rho: float, poisson: float | None = None) -> dict[str, Param]:
+    """material.E, material.rho (and material.poisson) with the given defaults."""
+    out = {"material.E": positive(E, "Young's modulus", "Pa"), "material.rho": positive(rho, "density", "kg/m^3")}
+    if poisson is not None:
+        out["material.poisson"] = Param(poisson, "Poisson ratio", low=-0.99, high=0.49)
+    return out
+
+
 def flatten(table: dict, prefix: str = "") -> dict[str, Any]:
     """Nested TOML tables -> {"a.b.c": value}."""
     flat = {}

@@ -66,7 +66,6 @@ class EnergyLedger:
     internal: float = 0.0
     external_work: float = 0.0
     support_work: float = 0.0
-    coupling_work: float = 0.0
     damping: float = 0.0
 
 
@@ -101,10 +100,8 @@ class ExplicitDynamics:
         self.m = r.mass + self.added_mass + (0.0 if self.extra_mass is None else self.extra_mass)
         zero = np.zeros((r.n_nodes, r.dim))
         self.state = FemState(zero.copy(), zero.copy(), zero.copy(), zero.copy())
-        self.f_coupling = zero.copy()  # written by the interface stage before compute_forces
         self.ledger = EnergyLedger()
         self._prescribed = np.unique(np.concatenate([s.dofs for s in self.supports])) if self.supports else np.zeros(0, int)
-        self._f_coupling_prev = zero.copy()
         self._u_at_forces, self._t_at_forces, self._dt = zero.copy(), 0.0, 0.0
         self._surface = r.mesh.boundary_nodes() if self.impactors else np.zeros(0, int)
         self._contact_prev = [(np.zeros((len(self._surface), r.dim)), np.zeros(r.dim)) for _ in self.impactors]
@@ -170,7 +167,7 @@ class ExplicitDynamics:
         self._dt = s.t - self._t_at_forces
         L.external_work += 0.5 * float(np.vdot(s.f_ext + f_ext, du))
         L.damping += float(np.vdot(f_damp, du))
-        f = f_ext - f_int - f_damp + self.f_coupling
+        f = f_ext - f_int - f_damp
         if self.impactors:
             f += self._contact(du)
         a = f / self.m[:, None]
@@ -181,8 +178,6 @@ class ExplicitDynamics:
             L.support_work += 0.5 * float(np.vdot(self._reaction_prev + reaction, du.reshape(-1)[self._prescribed]))
             self._reaction_prev = reaction
             a.reshape(-1)[self._prescribed] = a_pres
-        L.coupling_work += 0.5 * float(np.vdot(self._f_coupling_prev + self.f_coupling, du))
-        self._f_coupling_prev = self.f_coupling.copy()
         s.a, s.f_ext = a, f_ext
         self.f_int = f_int
         self._u_at_forces, self._t_at_forces = s.u.copy(), s.t  # the ledger's time level

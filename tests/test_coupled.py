@@ -40,7 +40,7 @@ def _region(kind, nx, ny, jitter, seed):
     return FemRegion(m, ELEMENTS[kind], materials.plane_strain(materials.isotropic(1e9, 0.3)), 1000.0, 1.0)
 
 
-@settings(max_examples=25, deadline=None)
+@settings(max_examples=25, deadline=None, derandomize=True)
 @given(kind=st.sampled_from(["quad4", "tri3"]), nx=st.integers(1, 6), ny=st.integers(1, 6),
        jitter=st.floats(0, 0.3), n=st.integers(1, 40), seed=st.integers(0, 2**31))
 def test_interface_maps(kind, nx, ny, jitter, n, seed):

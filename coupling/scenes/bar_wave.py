@@ -11,16 +11,14 @@ from fem_region import materials, mesh
 from fem_region.explicit import ExplicitDynamics, PrescribedMotion
 
 from ..checks import check
-from ..params import Param, positive
+from ..params import Param, isotropic_material, positive
 from .common import FEM_OPTIONS, fem_only, make_region
 
 NAME = "bar_wave"
 DESCRIPTION = "velocity pulse in a free bar; wave speed against sqrt(E/rho)"
 MODES = ("fem",)
 PARAMETERS = {
-    "material.E": positive(200e9, "Young's modulus", "Pa"),
-    "material.rho": positive(7800.0, "density", "kg/m^3"),
-    "material.poisson": Param(0.3, "Poisson ratio", low=-0.99, high=0.49),
+    **isotropic_material(200e9, 7800.0, 0.3),
     "geometry.length": positive(1.0, "bar length", "m"),
     "geometry.height": positive(0.02, "bar height (in plane)", "m"),
     "geometry.width": positive(0.02, "bar width (out of plane)", "m"),

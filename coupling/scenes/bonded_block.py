@@ -24,12 +24,11 @@ from dem_region.backends import make_backend
 from dem_region.scene import DemScene
 
 from ..checks import check
-from ..params import Param, positive
+from ..params import Param, isotropic_material, positive
 from ..simulation import Simulation, Stage
 
 COMMON = {
-    "material.E": positive(10e9, "target Young's modulus", "Pa"),
-    "material.rho": positive(2000.0, "density", "kg/m^3"),
+    **isotropic_material(10e9, 2000.0),
     "particle.radius": positive(0.0005, "sphere radius", "m"),
     "packing.kind": Param("square", "regular layer", kind="str", choices=("square", "hexagonal")),
     "geometry.columns": Param(40, "particles along the block", kind="int", low=4),

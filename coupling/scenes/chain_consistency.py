@@ -17,7 +17,7 @@ from fem_region import mesh
 from fem_region.explicit import ExplicitDynamics, PrescribedMotion
 
 from ..checks import bound
-from ..params import Param, positive
+from ..params import Param, isotropic_material, positive
 from .common import fem_only, make_region
 from .coupled_common import COUPLING, coupled_simulation
 from .standalone import dem_only
@@ -26,8 +26,7 @@ NAME = "chain_consistency"
 DESCRIPTION = "coupled: FEM bar + DEM chain vs the monolithic chain, to round-off"
 MODES = ("coupled", "fem", "dem")
 PARAMETERS = {
-    "material.E": positive(1e9, "Young's modulus of the bar", "Pa"),
-    "material.rho": positive(1000.0, "density of the bar", "kg/m^3"),
+    **isotropic_material(1e9, 1000.0),
     "particle.radius": positive(0.005, "sphere radius = half the FEM element length", "m"),
     "chain.fem_elements": Param(20, "FEM elements along the left part", kind="int", low=1),
     "chain.particles": Param(20, "free DEM particles in the right part", kind="int", low=1),

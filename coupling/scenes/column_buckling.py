@@ -20,16 +20,14 @@ from fem_region.explicit import ExplicitDynamics, PrescribedMotion
 from fem_region.modal import lowest_modes
 
 from ..checks import check
-from ..params import Param, positive
+from ..params import Param, isotropic_material, positive
 from .common import FEM_OPTIONS, fem_only, make_region
 
 NAME = "column_buckling"
 DESCRIPTION = "FEM (TL): clamped-clamped column, buckling load vs 4 pi^2 E I / L^2"
 MODES = ("fem",)
 PARAMETERS = {
-    "material.E": positive(200e9, "Young's modulus", "Pa"),
-    "material.rho": positive(7800.0, "density", "kg/m^3"),
-    "material.poisson": Param(0.3, "Poisson ratio", low=0.0, high=0.49),
+    **isotropic_material(200e9, 7800.0, 0.3),
     "geometry.length": positive(0.4, "length between the clamps", "m"),
     "geometry.thickness": positive(0.01, "depth in the buckling plane", "m"),
     "geometry.width": positive(0.01, "width out of plane", "m"),

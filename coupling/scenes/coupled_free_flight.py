@@ -13,7 +13,7 @@ from fem_region import materials, mesh
 from fem_region.explicit import ExplicitDynamics
 
 from ..checks import bound
-from ..params import Param, positive
+from ..params import Param, isotropic_material, positive
 from .common import make_region
 from .coupled_common import COUPLING, coupled_simulation
 
@@ -21,8 +21,7 @@ NAME = "coupled_free_flight"
 DESCRIPTION = "coupled: free FEM block + bonded lattice, momentum conserved to 1e-12"
 MODES = ("coupled",)
 PARAMETERS = {
-    "material.E": positive(10e9, "Young's modulus (FEM; lattice bonds calibrated to it)", "Pa"),
-    "material.rho": positive(2000.0, "density", "kg/m^3"),
+    **isotropic_material(10e9, 2000.0),
     "geometry.fem_length": positive(0.04, "FEM block length", "m"),
     "geometry.dem_length": positive(0.04, "lattice length", "m"),
     "geometry.height": positive(0.02, "height", "m"),

@@ -16,7 +16,7 @@ from fem_region import materials, mesh
 from fem_region.explicit import ExplicitDynamics, PrescribedMotion
 
 from ..checks import bound
-from ..params import Param, positive
+from ..params import Param, isotropic_material, positive
 from .common import make_region
 from .coupled_common import COUPLING, coupled_simulation
 
@@ -24,8 +24,7 @@ NAME = "coupled_vibration"
 DESCRIPTION = "coupled: undamped FEM + lattice cantilever, energy drift over 10^5 steps"
 MODES = ("coupled",)
 PARAMETERS = {
-    "material.E": positive(10e9, "Young's modulus", "Pa"),
-    "material.rho": positive(2000.0, "density", "kg/m^3"),
+    **isotropic_material(10e9, 2000.0),
     "particle.radius": positive(0.0005, "lattice sphere radius", "m"),
     "geometry.length": positive(0.04, "beam length (half FEM, half lattice)", "m"),
     "geometry.height": positive(0.004, "beam depth", "m"),

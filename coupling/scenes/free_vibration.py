@@ -12,16 +12,14 @@ from fem_region.explicit import ExplicitDynamics, PrescribedMotion
 from fem_region.modal import lowest_modes
 
 from ..checks import bound
-from ..params import Param, positive
+from ..params import Param, isotropic_material, positive
 from .common import FEM_OPTIONS, fem_only, make_region
 
 NAME = "free_vibration"
 DESCRIPTION = "FEM: undamped clamped beam in its first mode, energy drift over 10^4 steps"
 MODES = ("fem",)
 PARAMETERS = {
-    "material.E": positive(70e9, "Young's modulus", "Pa"),
-    "material.rho": positive(2700.0, "density", "kg/m^3"),
-    "material.poisson": Param(0.3, "Poisson ratio", low=-0.99, high=0.49),
+    **isotropic_material(70e9, 2700.0, 0.3),
     "geometry.length": positive(0.2, "free length", "m"),
     "geometry.thickness": positive(0.01, "depth (in plane)", "m"),
     "geometry.width": positive(0.01, "width (out of plane)", "m"),

@@ -25,7 +25,7 @@ from fem_region import materials, mesh
 from fem_region.explicit import ExplicitDynamics
 
 from ..checks import bound
-from ..params import Param, positive
+from ..params import Param, isotropic_material, positive
 from .common import make_region
 from .coupled_common import COUPLING, coupled_simulation
 
@@ -33,8 +33,7 @@ NAME = "interface_patch"
 DESCRIPTION = "coupled: uniform strain across the interface, no spurious interface force"
 MODES = ("coupled",)
 PARAMETERS = {
-    "material.E": positive(10e9, "Young's modulus of both sides", "Pa"),
-    "material.rho": positive(2000.0, "density", "kg/m^3"),
+    **isotropic_material(10e9, 2000.0),
     "particle.radius": positive(0.0005, "lattice sphere radius (spacing 2r)", "m"),
     "geometry.fem_columns": Param(4, "FEM elements along x", kind="int", low=1),
     "geometry.rows": Param(5, "FEM elements along y", kind="int", low=2),

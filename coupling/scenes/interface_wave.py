@@ -20,7 +20,7 @@ from fem_region.explicit import ExplicitDynamics, PrescribedMotion
 from fem_region.loads import sine_squared
 
 from ..checks import bound
-from ..params import Param, positive
+from ..params import Param, isotropic_material, positive
 from .common import make_region
 from .coupled_common import COUPLING, coupled_simulation
 
@@ -28,8 +28,7 @@ NAME = "interface_wave"
 DESCRIPTION = "coupled: pulse FEM -> DEM -> FEM, reflected < 2 %, transmitted > 95 %"
 MODES = ("coupled",)
 PARAMETERS = {
-    "material.E": positive(1e9, "Young's modulus", "Pa"),
-    "material.rho": positive(1000.0, "density", "kg/m^3"),
+    **isotropic_material(1e9, 1000.0),
     "particle.radius": positive(0.005, "sphere radius = half the FEM element length", "m"),
     "chain.left_elements": Param(60, "elements in the left strip", kind="int", low=10),
     "chain.particles": Param(40, "chain particles between the strips", kind="int", low=2),
