@@ -66,6 +66,8 @@ class Simulation:
     close: Callable[[], None] = lambda: None
     timing_correction: Callable[[], dict[str, float]] | None = None
     instability_hint: str = "time step above the stable limit, or a penalty too stiff"
+    # extra run-time checks at each sample: each returns None or a diagnostic (region, cause)
+    guards: list[Callable[[], str | None]] = field(default_factory=list)
     versions: dict[str, str] = field(default_factory=dict)
 
 
@@ -116,6 +118,10 @@ def run_clock(sim: Simulation, on_sample: Callable[[int, float], None] | None = 
             raise Instability(f"step {step}, t = {values['time']:.4g} s: energy balance error "
                               f"{values['balance_error_rel']:.3g} exceeds guards.energy_growth = {sim.energy_growth_tol:g} "
                               f"(energy created); likely cause: {sim.instability_hint}")
+        for guard in sim.guards:
+            problem = guard()
+            if problem:
+                raise Instability(f"step {step}, t = {values['time']:.4g} s: {problem}")
         if on_sample:
             on_sample(step, values["time"])
 

@@ -248,6 +248,16 @@ class FemRegion:
         ue = u.ravel()[self._edofs]
         return 0.5 * np.einsum("ea,eab,eb->e", ue, self.ke, ue)
 
+    def inverted_elements(self, u: np.ndarray) -> np.ndarray:
+        """Indices of elements whose deformation gradient has det F <= 0 at a quadrature point
+        (the element turned inside out)."""
+        ue = u[self.mesh.t.T]
+        bad = np.zeros(self.n_elements, bool)
+        for q in self.rules:
+            F = np.einsum("eai,eqaj->eqij", ue, q.dN) + np.eye(self.dim)
+            bad |= (np.linalg.det(F) <= 0).any(axis=1)
+        return np.flatnonzero(bad)
+
     def centroid_strain_stress(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Small-strain (nel, ns) strain and stress (Pa) at element centroids (Voigt)."""
         if not hasattr(self, "_B1"):

@@ -151,3 +151,14 @@ def test_laminated_plate_mesh():
     assert np.bincount(ply).tolist() == [64] * 4
     C = lam.global_C(ply, 3)
     assert np.allclose(C[ply == 1][:, 1, 1], C[ply == 0][:, 0, 0])  # 90 plies: fibres along y in 3D
+
+
+def test_inverted_elements_are_found():
+    r = _block()
+    u = np.zeros((r.n_nodes, 2))
+    assert r.inverted_elements(u).size == 0
+    # push one interior node through its neighbours: the elements around it turn inside out
+    node = r.nodes_where(lambda x: (np.abs(x[0] - 0.05) < 1e-9) & (np.abs(x[1] - 0.05 / 3) < 1e-9))[0]
+    u[node] = [0.0, -0.04]
+    bad = r.inverted_elements(u)
+    assert bad.size > 0 and all(node in r.mesh.t[:, e] for e in bad)

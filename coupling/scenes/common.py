@@ -61,6 +61,18 @@ def fem_fields(dyn: ExplicitDynamics):
     return frame
 
 
+def fem_guards(dyn: ExplicitDynamics) -> list:
+    """Run-time checks of a FEM participant: inverted elements."""
+    def inverted():
+        bad = dyn.region.inverted_elements(dyn.state.u)
+        if bad.size:
+            x = dyn.region.X[dyn.region.mesh.t[:, bad[0]]].mean(axis=0)
+            return (f"FEM: {bad.size} inverted element(s), first {bad[0]} at {np.round(x, 6).tolist()} m "
+                    "(excessive distortion: impactor penetration, hourglassing or a step too large)")
+        return None
+    return [inverted]
+
+
 def fem_only(dyn: ExplicitDynamics, p: dict, t_end_default: float, probes: dict, **kw) -> Simulation:
     """A Simulation that steps one explicit FEM participant alone."""
     dt_stable = dyn.critical_dt()
@@ -76,4 +88,4 @@ def fem_only(dyn: ExplicitDynamics, p: dict, t_end_default: float, probes: dict,
                 "particles": 0, "bonds": 0, "interface_particles": 0},
         clock_info={"dt_fem": dt, "dt_dem": 0.0, "dt_stable_fem": dt_stable, "substeps": 0},
         fields=fem_fields(dyn), field_frames=p["output.field_frames"],
-        energy_growth_tol=p["guards.energy_growth"], **kw)
+        energy_growth_tol=p["guards.energy_growth"], guards=fem_guards(dyn), **kw)

@@ -15,7 +15,7 @@ from interfaces.ties import KinematicTie, PenaltyTie
 from ..coupled import CoupledClock
 from ..params import CaseError, Param
 from ..simulation import FieldFrame, Simulation
-from .common import n_steps, time_step
+from .common import fem_guards, n_steps, time_step
 
 
 # parameters every coupled scene takes (spread into its PARAMETERS)
@@ -96,7 +96,8 @@ def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, st
         clock_info={"dt_fem": dt, "dt_dem": dt / m, "dt_stable_fem": dt_fem, "dt_stable_dem": dt_dem, "substeps": m},
         fields=fields, field_frames=p["output.field_frames"], energy_growth_tol=p["guards.energy_growth"],
         close=backend.finalize, versions={dem: backend.version}, timing_correction=clock.timing_correction,
-        instability_hint=_hint(p, tie, m, dt, dt_dem))
+        instability_hint=_hint(p, tie, m, dt, dt_dem),
+        guards=fem_guards(fem) + [particles_escaped(backend, scene)])
     return sim, clock
 
 
@@ -108,3 +109,19 @@ def _hint(p: dict, tie, m: int, dt: float, dt_dem_stable: float) -> str:
     return (f"{m} DEM substeps per FEM step of {dt:.3g} s = {dt * omega / np.pi:.1f} half-periods of the fastest "
             f"DEM mode ({tie.name} tie): impulse time stepping resonates near whole periods; try "
             "clock.substeps=1 or another substep count")
+
+
+def particles_escaped(backend, scene: DemScene, factor: float = 2.0):
+    """A guard: particles farther from the zone's centre than ``factor`` times its initial
+    half-diagonal have left the damage zone (a blown-up bond, or an interface that lets go)."""
+    centre = 0.5 * (scene.x.min(axis=0) + scene.x.max(axis=0))
+    reach = factor * max(float(np.linalg.norm(scene.x.max(axis=0) - centre)), float(scene.radius.max()))
+
+    def check():
+        d = np.linalg.norm(backend.positions() - centre, axis=1)
+        out = np.flatnonzero(d > reach)
+        if out.size:
+            return (f"DEM: {out.size} particle(s) left the damage zone, first {out[0]} at "
+                    f"{np.round(backend.positions()[out[0]], 6).tolist()} m (unstable bonds or interface)")
+        return None
+    return check
