@@ -26,6 +26,8 @@ COMMON: dict[str, Param] = {
     "clock.substeps": Param(0, "DEM steps per FEM step; 0 = automatic", kind="int", low=0, high=1000),
     "output.history_every": Param(0, "clock steps between history samples; 0 = about 1000 samples", kind="int", low=0),
     "output.field_frames": Param(20, "number of XDMF frames", kind="int", low=0, high=10000),
+    "output.checkpoint_every": Param(0, "clock steps between checkpoints; 0 = a tenth of runs of 5,000 "
+                                     "steps or more, none for shorter ones", kind="int", low=0),
     "dem.process": Param("auto", "where the DEM engine runs: auto (in-process for yade/liggghts, a worker "
                          "process for lammps), in-process, or worker", kind="str",
                          choices=("auto", "in-process", "worker")),

@@ -27,13 +27,14 @@ def _parser() -> argparse.ArgumentParser:
     d.add_argument("--json", action="store_true")
     sub.add_parser("cases", help="list bundled cases")
     r = sub.add_parser("run", help="run a case")
-    r.add_argument("case", help="bundled case name or path to a .toml case file")
+    r.add_argument("case", nargs="?", help="bundled case name or path to a .toml case file")
     r.add_argument("--dem", default="yade", help=f"DEM engine: {', '.join(ENGINES)}")
     r.add_argument("--mode", default=None, help=f"{', '.join(MODES)} (default: the case's first mode)")
     r.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="override a parameter by its dotted key (as echoed in summary.json)")
     r.add_argument("--out", default=None, help="run directory (default runs/<case>-<mode>-<time>)")
     r.add_argument("--quiet", action="store_true", help="no progress bar")
+    r.add_argument("--resume", default=None, metavar="DIR", help="continue a stopped run from its last checkpoint")
     return p
 
 
@@ -64,7 +65,14 @@ def _cases() -> int:
 
 
 def _run(args) -> int:
-    from .run import execute
+    from .run import execute, resume
+    if args.resume:
+        code, out, summary = resume(args.resume, args.quiet)
+        if not args.quiet or code:
+            _report(summary, out)
+        return code
+    if not args.case:
+        raise CaseError("CASE: missing; allowed: a bundled case name, a .toml path, or --resume DIR")
     if args.dem not in ENGINES:
         raise CaseError(f"--dem {args.dem}: allowed {', '.join(ENGINES)}")
     case = load_case(args.case, parse_set(args.set))

@@ -83,6 +83,30 @@ class CoupledClock:
                          "external_work": f["external_work"], "dissipated": f["dissipated"] + d["dissipated"]}
         self.interface_work_snapshot = self.interface_work
 
+    # -- checkpoint ---------------------------------------------------------------------------
+    _SCALARS = ("k", "interface_work", "interface_work_snapshot")
+    _ARRAYS = ("momentum_snapshot", "u_snapshot", "v_snapshot", "f_tie")
+
+    def checkpoint_state(self) -> dict:
+        d = {"fem": self.fem.checkpoint_state(), "snapshot": dict(self.snapshot),
+             **{k: getattr(self, k) for k in self._SCALARS + self._ARRAYS if hasattr(self, k)}}
+        if hasattr(self.tie, "_stretch"):
+            d["tie_stretch"] = self.tie._stretch
+        return d
+
+    def restore_state(self, d: dict, engine_checkpoint) -> None:
+        self.fem.restore_state(d["fem"])
+        self.snapshot = {k: float(v) for k, v in d["snapshot"].items()}
+        for k in self._SCALARS:
+            if k in d:
+                setattr(self, k, type(getattr(self, k, 0.0))(d[k]) if k != "k" else int(d[k]))
+        for k in self._ARRAYS:
+            if k in d:
+                setattr(self, k, np.array(d[k]))
+        if "tie_stretch" in d:
+            self.tie._stretch = np.array(d["tie_stretch"])
+        self.dem.restore(engine_checkpoint)
+
     def step(self) -> None:
         """One FEM step = m DEM steps."""
         for _ in range(self.m):

@@ -33,14 +33,14 @@ def _cwd(path: Path):
 class RunOutput:
     """Writer for one run directory: fields over time, then history, summary and plots."""
 
-    def __init__(self, final_dir: Path):
+    def __init__(self, final_dir: Path, resume: bool = False):
         self.final = Path(final_dir)
         if self.final.exists() and any(self.final.iterdir()):
             raise FileExistsError(str(self.final))
         self.dir = self.final.with_name(self.final.name + ".partial")
-        if self.dir.exists():
+        if self.dir.exists() and not resume:
             shutil.rmtree(self.dir)
-        (self.dir / "plots").mkdir(parents=True)
+        (self.dir / "plots").mkdir(parents=True, exist_ok=True)
         self._xdmf = None
 
     def frame(self, t: float, f: FieldFrame) -> None:
@@ -64,6 +64,8 @@ class RunOutput:
         tmp = self.dir / "summary.json.tmp"
         tmp.write_text(json.dumps(summary, indent=2, default=_jsonable) + "\n")
         os.replace(tmp, self.dir / "summary.json")
+        for name in ("checkpoint", "checkpoint.old", "checkpoint.tmp"):
+            shutil.rmtree(self.dir / name, ignore_errors=True)  # a finished run needs no restart
         if self.final.exists():
             self.final.rmdir()  # empty (checked in __init__)
         os.replace(self.dir, self.final)

@@ -7,6 +7,7 @@ import sys
 import time
 from pathlib import Path
 
+from . import checkpoint
 from .case import Case
 from .output import RunOutput
 from .params import CaseError
@@ -18,16 +19,20 @@ def default_out(case: Case, mode: str) -> Path:
     return Path("runs") / f"{case.name}-{mode}-{stamp}"
 
 
-def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool) -> tuple[int, Path, dict]:
-    """Run one case; returns (exit code, run directory, summary)."""
+def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool,
+            resume_from: Path | None = None) -> tuple[int, Path, dict]:
+    """Run one case (or continue it from the checkpoint ``resume_from``); returns (exit code,
+    run directory, summary)."""
     scene = case.scene
     if mode not in scene.MODES:
         raise CaseError(f"--mode {mode}: case {case.name} supports {', '.join(scene.MODES)}")
     out = Path(out) if out else default_out(case, mode)
     try:
-        writer = RunOutput(out)
+        writer = RunOutput(out, resume=resume_from is not None)
     except FileExistsError:
         raise CaseError(f"--out {out}: directory exists and is not empty; allowed: a new or empty directory") from None
+    checkpoint.write_run_info(writer.dir, {"case": case.name, "case_file": str(case.path), "mode": mode, "dem": dem,
+                                           "parameters": case.parameters})
     t_start = time.perf_counter()
     sim, result, qoi, checks = None, None, {}, {}
     status, message = "ok", ""
@@ -35,7 +40,9 @@ def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool) -> t
         sim = scene.build(case.parameters, mode, dem)
         bar = _progress(sim, quiet)
         try:
-            result = run_clock(sim, on_sample=bar.update if bar else None, on_frame=writer.frame)
+            every = case.parameters["output.checkpoint_every"] or (sim.n_steps // 10 if sim.n_steps >= 5000 else 0)
+            result = run_clock(sim, on_sample=bar.update if bar else None, on_frame=writer.frame,
+                               run_dir=writer.dir, checkpoint_every=every, resume_from=resume_from)
         except Instability as exc:
             status, message, result = "unstable", str(exc), exc.partial
         finally:
@@ -97,3 +104,22 @@ def _versions() -> dict:
     import scipy
     import skfem
     return {"numpy": numpy.__version__, "scipy": scipy.__version__, "scikit-fem": skfem.__version__}
+
+
+def resume(run_dir: Path, quiet: bool) -> tuple[int, Path, dict]:
+    """Continue a run that was stopped (killed, or lost its machine) from its last checkpoint."""
+    from .case import load_case
+    run_dir = Path(run_dir)
+    final = run_dir.with_name(run_dir.name[: -len(".partial")]) if run_dir.name.endswith(".partial") else run_dir
+    partial = final.with_name(final.name + ".partial")
+    if (final / "summary.json").exists():
+        raise CaseError(f"--resume {run_dir}: this run finished; allowed: the directory of a stopped run")
+    info_path = partial / "run.json"
+    ck_dir = checkpoint.latest(partial) if partial.exists() else None
+    if not info_path.exists() or ck_dir is None:
+        raise CaseError(f"--resume {run_dir}: no checkpoint there; allowed: a run directory with checkpoint/ "
+                        "(runs write one every output.checkpoint_every steps)")
+    import json
+    info = json.loads(info_path.read_text())
+    case = load_case(info["case_file"], info["parameters"])
+    return execute(case, info["mode"], info["dem"], final, quiet, resume_from=ck_dir)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Callable
 
 import numpy as np
@@ -68,6 +69,9 @@ class Simulation:
     instability_hint: str = "time step above the stable limit, or a penalty too stiff"
     # extra run-time checks at each sample: each returns None or a diagnostic (region, cause)
     guards: list[Callable[[], str | None]] = field(default_factory=list)
+    # checkpoint support: () -> (state dict, engine_save(path) or None); (state, engine path) -> None
+    checkpoint: Callable[[], tuple[dict, Callable | None]] | None = None
+    restore: Callable[[dict, object], None] | None = None
     versions: dict[str, str] = field(default_factory=dict)
 
 
@@ -84,20 +88,34 @@ def energy_balance_error(e: dict[str, float], e0: dict[str, float], scale: float
 
 
 def run_clock(sim: Simulation, on_sample: Callable[[int, float], None] | None = None,
-              on_frame: Callable[[float, FieldFrame], None] | None = None) -> dict:
+              on_frame: Callable[[float, FieldFrame], None] | None = None, run_dir=None,
+              checkpoint_every: int = 0, resume_from=None) -> dict:
     """Advance ``sim`` by its n_steps; returns {history, timing_s, energy, steps}.
 
+    With run_dir and checkpoint_every > 0 a checkpoint is written every that many steps;
+    resume_from (a checkpoint directory) continues such a run where it stopped.
     Raises Instability (with the samples gathered so far attached as ``.partial``) when a
     probe or energy is not finite or the energy balance error exceeds sim.energy_growth_tol.
     """
+    from . import checkpoint as ck
+
     timing = dict.fromkeys(TIMERS, 0.0)
     names = ["time", *sim.probes, "kinetic", "internal", "external_work", "dissipated", "balance_error_rel"]
     hist: dict[str, list[float]] = {k: [] for k in names}
     e0 = sim.energies()
+    first = 1
+    if resume_from is not None:
+        saved = ck.read(resume_from)
+        engine = Path(resume_from) / "dem.yade.bz2"
+        sim.restore(saved["simulation"], engine if engine.exists() else None)
+        loop = saved["loop"]
+        hist = {k: list(np.asarray(loop["history"][k]).tolist()) for k in names}
+        e0 = {k: float(v) for k, v in loop["e0"].items()}
+        first = int(loop["step"]) + 1
     frame_every = max(1, sim.n_steps // sim.field_frames) if sim.fields and sim.field_frames else 0
     clock = time.perf_counter
 
-    scale = [energy_scale(e0)]
+    scale = [energy_scale(e0) if resume_from is None else float(saved["loop"]["scale"])]
 
     def sample(step: int) -> None:
         t0 = clock()
@@ -130,12 +148,21 @@ def run_clock(sim: Simulation, on_sample: Callable[[int, float], None] | None = 
         on_frame(step * sim.dt, sim.fields())
         timing["io"] += clock() - t0
 
-    step = 0
+    def save(step: int) -> None:
+        t0 = clock()
+        state, engine_save = sim.checkpoint()
+        loop = {"step": step, "e0": e0, "scale": scale[0], "history": {k: np.asarray(v) for k, v in hist.items()}}
+        ck.write(run_dir, {"simulation": state, "loop": loop}, engine_save)
+        timing["io"] += clock() - t0
+
+    can_save = run_dir is not None and checkpoint_every > 0 and sim.checkpoint is not None
+    step = first - 1
     try:
-        sample(0)
+        if resume_from is None:
+            sample(0)
         if frame_every and on_frame:
-            frame(0)
-        for step in range(1, sim.n_steps + 1):
+            frame(step)
+        for step in range(first, sim.n_steps + 1):
             for stage in sim.stages:
                 t0 = clock()
                 stage.run()
@@ -144,6 +171,8 @@ def run_clock(sim: Simulation, on_sample: Callable[[int, float], None] | None = 
                 sample(step)
             if frame_every and on_frame and step % frame_every == 0:
                 frame(step)
+            if can_save and step % checkpoint_every == 0 and step < sim.n_steps:
+                save(step)
     except Instability as exc:
         exc.partial = _result(hist, _corrected(timing, sim), sim.energies(), step)  # type: ignore[attr-defined]
         raise

@@ -234,6 +234,36 @@ class ExplicitDynamics:
         self.compute_forces()
         self.ledger = EnergyLedger(kinetic=self.kinetic_energy())
 
+    # -- checkpoint ---------------------------------------------------------------------------
+    _PRIVATE = ("_u_at_forces", "_t_at_forces", "_dt", "_reaction_prev", "_ke_prev", "_contact_work",
+                "_contact_energy")
+
+    def checkpoint_state(self) -> dict:
+        """Everything that evolves: a restore followed by the same steps is bit-identical."""
+        s = self.state
+        d = {"u": s.u, "v": s.v, "a": s.a, "f_ext": s.f_ext, "t": s.t, "step": s.step,
+             "ledger": dict(vars(self.ledger)), **{k: getattr(self, k) for k in self._PRIVATE},
+             "impactors": [{"x": i.x, "v": i.v, "a": i.a, "x_at_forces": i.x_at_forces} for i in self.impactors],
+             "contact_prev": [{"f": f, "F": F} for f, F in self._contact_prev]}
+        if hasattr(self, "f_int"):
+            d["f_int"] = self.f_int
+        return d
+
+    def restore_state(self, d: dict) -> None:
+        s = self.state
+        for k in ("u", "v", "a", "f_ext"):
+            getattr(s, k)[:] = d[k]
+        s.t, s.step = float(d["t"]), int(d["step"])
+        self.ledger = EnergyLedger(**{k: float(v) for k, v in d["ledger"].items()})
+        for k in self._PRIVATE:
+            v = d[k]
+            setattr(self, k, np.array(v) if np.ndim(v) else float(v))
+        for imp, st in zip(self.impactors, d.get("impactors", [])):
+            imp.x[:], imp.v[:], imp.a[:], imp.x_at_forces[:] = st["x"], st["v"], st["a"], st["x_at_forces"]
+        self._contact_prev = [(np.array(c["f"]), np.array(c["F"])) for c in d.get("contact_prev", [])]
+        if "f_int" in d:
+            self.f_int = np.array(d["f_int"])
+
     # -- energies ----------------------------------------------------------------------------
     def kinetic_energy(self) -> float:
         return (0.5 * float(np.einsum("n,ni,ni->", self.m, self.state.v, self.state.v))

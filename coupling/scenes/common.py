@@ -88,4 +88,5 @@ def fem_only(dyn: ExplicitDynamics, p: dict, t_end_default: float, probes: dict,
                 "particles": 0, "bonds": 0, "interface_particles": 0},
         clock_info={"dt_fem": dt, "dt_dem": 0.0, "dt_stable_fem": dt_stable, "substeps": 0},
         fields=fem_fields(dyn), field_frames=p["output.field_frames"],
-        energy_growth_tol=p["guards.energy_growth"], guards=fem_guards(dyn), **kw)
+        energy_growth_tol=p["guards.energy_growth"], guards=fem_guards(dyn),
+        checkpoint=lambda: (dyn.checkpoint_state(), None), restore=lambda d, _: dyn.restore_state(d), **kw)

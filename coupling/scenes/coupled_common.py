@@ -97,7 +97,8 @@ def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, st
         fields=fields, field_frames=p["output.field_frames"], energy_growth_tol=p["guards.energy_growth"],
         close=backend.finalize, versions={dem: backend.version}, timing_correction=clock.timing_correction,
         instability_hint=_hint(p, tie, m, dt, dt_dem),
-        guards=fem_guards(fem) + [particles_escaped(backend, scene)])
+        guards=fem_guards(fem) + [particles_escaped(backend, scene)],
+        checkpoint=lambda: (clock.checkpoint_state(), backend.checkpoint), restore=clock.restore_state)
     return sim, clock
 
 

@@ -154,6 +154,12 @@ class YadeBackend:
         default); their other degrees of freedom stay dynamic."""
         ids = np.asarray(ids, int)
         self.prescribed = np.union1d(self.prescribed, ids) if dofs != "xyz" else ids
+        if dofs == "xyz":
+            # slaved particles must not touch each other: the body they follow (the FEM)
+            # already carries those forces; YADE skips pairs sharing avoidSelfInteractionMask
+            for i in ids.tolist():
+                self.O.bodies[i].groupMask = 3
+            self.O.engines[2].avoidSelfInteractionMask = 2
         self._partial = getattr(self, "_partial", {})
         blocked = dofs + ("XYZ" if dofs == "xyz" else ("zXY" if self.scene.plane else ""))
         for i in ids.tolist():
