@@ -63,6 +63,11 @@ class HourglassControl:
         g = np.einsum("e,ema,emb->eab", self.k, self.gamma, self.gamma)
         return np.einsum("eab,ij->eaibj", g, np.eye(dim)).reshape(len(g), g.shape[1] * dim, -1)
 
+    def energy(self, ue: np.ndarray) -> float:
+        """Stored hourglass energy (J) of the stiffness form at element displacements ue."""
+        q = np.einsum("ema,eai->emi", self.gamma, ue)
+        return 0.5 * float(np.einsum("e,emi,emi->", self.k, q, q))
+
     def force(self, coef: np.ndarray, ue: np.ndarray) -> np.ndarray:
         """coef (nel,), ue: (nel, n_loc, dim) -> element forces (nel, n_loc, dim)."""
         q = np.einsum("ema,eai->emi", self.gamma, ue)

@@ -39,3 +39,49 @@ def test_one_million_steps(femdem):
     code, s, _ = femdem("run", "free_vibration", "--set", "run.steps=1000000")
     assert code == 0 and s["clock"]["steps"] == 1_000_000
     assert_checks(s)
+
+
+def test_block_impact_momentum(femdem):
+    code, s, _ = femdem("run", "block_impact")
+    assert code == 0
+    assert_checks(s)
+    assert s["energy"]["balance_error_rel"] < 0.01
+
+
+def test_high_velocity_impact_with_a_soft_penalty_stops_with_the_remedy(femdem):
+    code, s, _ = femdem("run", "block_impact", "--set", "impact.velocity=400", "--set", "impactor.penalty=1e7")
+    assert code == 3 and s["status"] == "unstable"
+    assert "penetrates" in s["message"] and "penalty 1e+07" in s["message"] and "dt below" in s["message"]
+
+
+def test_hourglass_guard_names_the_cause():
+    """An hourglass pattern imposed on a one-point Q4 mesh is reported as hourglassing."""
+    import numpy as np
+    from coupling.scenes.common import fem_guards
+    from fem_region import materials, mesh
+    from fem_region.elements import ELEMENTS
+    from fem_region.explicit import ExplicitDynamics
+    from fem_region.region import FemRegion
+    m = mesh.rectangle(np.linspace(0, 1, 5), np.linspace(0, 1, 5))
+    r = FemRegion(m, ELEMENTS["quad4"], materials.plane_strain(materials.isotropic(1e9, 0.3)), 1.0, 1.0, "reduced")
+    dyn = ExplicitDynamics(r)
+    x, y = r.X.T
+    dyn.state.u[:, 0] = 1e-4 * (-1.0) ** (np.round(x * 4) + np.round(y * 4))  # checkerboard: an hourglass mode
+    messages = [g() for g in fem_guards(dyn)]
+    assert any(msg and "hourglass" in msg for msg in messages)
+    dyn.state.u[:] = 1e-4 * r.X  # a uniform strain is not hourglassing
+    assert not any(g() for g in fem_guards(dyn))
+
+
+def test_resume_uses_the_last_complete_checkpoint(tmp_path):
+    """A kill during the checkpoint swap leaves checkpoint.old (complete) and a partial tmp:
+    the resume takes the complete one and ignores the half-written one."""
+    from coupling import checkpoint
+    run = tmp_path / "run.partial"
+    run.mkdir()
+    checkpoint.write(run, {"loop": {"step": 10}})
+    (run / "checkpoint").rename(run / "checkpoint.old")  # as if killed between the two renames
+    (run / "checkpoint.tmp").mkdir()
+    (run / "checkpoint.tmp" / "state.h5").write_bytes(b"\x89HDF half written")
+    found = checkpoint.latest(run)
+    assert found == run / "checkpoint.old" and checkpoint.read(found)["loop"]["step"] == 10

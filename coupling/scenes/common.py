@@ -61,16 +61,46 @@ def fem_fields(dyn: ExplicitDynamics):
     return frame
 
 
-def fem_guards(dyn: ExplicitDynamics) -> list:
-    """Run-time checks of a FEM participant: inverted elements."""
+def fem_guards(dyn: ExplicitDynamics, hourglass_limit: float = 0.1, penetration_limit: float = 0.5) -> list:
+    """Run-time checks of a FEM participant: inverted elements, hourglass energy above
+    ``hourglass_limit`` of the strain energy, impactor penetration above
+    ``penetration_limit`` element sizes."""
+    region = dyn.region
+
     def inverted():
-        bad = dyn.region.inverted_elements(dyn.state.u)
+        bad = region.inverted_elements(dyn.state.u)
         if bad.size:
-            x = dyn.region.X[dyn.region.mesh.t[:, bad[0]]].mean(axis=0)
+            x = region.X[region.mesh.t[:, bad[0]]].mean(axis=0)
             return (f"FEM: {bad.size} inverted element(s), first {bad[0]} at {np.round(x, 6).tolist()} m "
                     "(excessive distortion: impactor penetration, hourglassing or a step too large)")
         return None
-    return [inverted]
+
+    def hourglass():
+        if region.hg is None or region.hg.form != "stiffness":
+            return None
+        e_hg = region.hg.energy(dyn.state.u[region.mesh.t.T])
+        e = region.strain_energy(dyn.state.u)
+        if e > 0 and e_hg > hourglass_limit * e:
+            return (f"FEM: hourglass energy {e_hg:.3g} J is {e_hg / e:.0%} of the strain energy "
+                    f"(> {hourglass_limit:.0%}): hourglassing; use fem.integration = 'full' or 'selective', "
+                    "or a finer mesh under the load")
+        return None
+
+    size = float(np.ptp(region.X[region.mesh.t], axis=0).max(axis=1).min())  # smallest element extent
+
+    def penetration():
+        for k, imp in enumerate(dyn.impactors):
+            pen, _ = imp.gap(region.X[dyn._surface] + dyn.state.u[dyn._surface])
+            if pen.max() > penetration_limit * size:
+                m = dyn.m[dyn._surface].min()
+                dt_need = 2.0 / np.sqrt(imp.penalty * (1 / m + 1 / imp.mass))
+                return (f"FEM: impactor {k} penetrates {pen.max():.3g} m (> {penetration_limit:g} of the element "
+                        f"size {size:.3g} m): normal penalty {imp.penalty:.3g} N/m is too soft for "
+                        f"{np.linalg.norm(imp.velocity):.3g} m/s; a stiffer penalty needs a smaller step "
+                        f"(k = 100 x this needs dt below {dt_need / 10:.3g} s)")
+        return None
+
+    return [inverted, hourglass, penetration]
 
 
 def fem_only(dyn: ExplicitDynamics, p: dict, t_end_default: float, probes: dict, **kw) -> Simulation:
