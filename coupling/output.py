@@ -51,8 +51,9 @@ class RunOutput:
                 self._xdmf.write_points_cells(f.points, f.cells)
             self._xdmf.write_data(t, point_data=f.point_data, cell_data=f.cell_data)
 
-    def finish(self, summary: dict, history: dict[str, np.ndarray]) -> Path:
-        """Write history.h5 and summary.json, close the fields, publish the directory."""
+    def finish(self, summary: dict, history: dict[str, np.ndarray], keep_checkpoint: bool = False) -> Path:
+        """Write history.h5 and summary.json, close the fields, publish the directory; the
+        last checkpoint stays with a run that did not finish well (to restart it)."""
         if self._xdmf is not None:
             with _cwd(self.dir):
                 self._xdmf.__exit__()
@@ -64,8 +65,8 @@ class RunOutput:
         tmp = self.dir / "summary.json.tmp"
         tmp.write_text(json.dumps(summary, indent=2, default=_jsonable) + "\n")
         os.replace(tmp, self.dir / "summary.json")
-        for name in ("checkpoint", "checkpoint.old", "checkpoint.tmp"):
-            shutil.rmtree(self.dir / name, ignore_errors=True)  # a finished run needs no restart
+        for name in ("checkpoint.old", "checkpoint.tmp") + (() if keep_checkpoint else ("checkpoint",)):
+            shutil.rmtree(self.dir / name, ignore_errors=True)
         if self.final.exists():
             self.final.rmdir()  # empty (checked in __init__)
         os.replace(self.dir, self.final)

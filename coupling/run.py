@@ -54,7 +54,8 @@ def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool,
             scene.plot(case.parameters, result["history"], qoi, writer.dir / "plots")
             result["timing_s"]["io"] += time.perf_counter() - t0
     except CaseError:
-        writer_cleanup(writer)
+        if resume_from is None:  # never delete the checkpoint a resume came for
+            writer_cleanup(writer)
         raise
     except Exception as exc:  # a defect or an engine failure: say so in the run directory too
         status, message = "error", f"{type(exc).__name__}: {exc}"
@@ -72,7 +73,7 @@ def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool,
         "timing_s": dict(result["timing_s"], total=time.perf_counter() - t_start),
         "energy": result["energy"], "qoi": qoi, "checks": checks, "status": status, "message": message,
     }
-    final = writer.finish(summary, result["history"])
+    final = writer.finish(summary, result["history"], keep_checkpoint=status != "ok")
     return {"ok": 0, "unstable": 3, "error": 1}[status], final, summary
 
 
