@@ -35,6 +35,17 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--out", default=None, help="run directory (default runs/<case>-<mode>-<time>)")
     r.add_argument("--quiet", action="store_true", help="no progress bar")
     r.add_argument("--resume", default=None, metavar="DIR", help="continue a stopped run from its last checkpoint")
+    b = sub.add_parser("bench", help="speed against error over a parameter sweep")
+    b.add_argument("case")
+    b.add_argument("--sweep", action="append", default=[], metavar="KEY=V1,V2,...", help="a swept parameter")
+    b.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="fixed for every run")
+    b.add_argument("--mode", default="coupled", help="mode of the swept runs")
+    b.add_argument("--dem", default="yade")
+    b.add_argument("--reference-mode", default="dem", help="mode of the reference run (default dem)")
+    b.add_argument("--reference-set", action="append", default=[], metavar="KEY=VALUE",
+                   help="overrides of the reference run (e.g. the finest setting)")
+    b.add_argument("--qoi", action="append", default=[], help="quantity of interest to compare (repeatable)")
+    b.add_argument("--out", default=None)
     return p
 
 
@@ -48,6 +59,9 @@ def main(argv: list[str] | None = None) -> int:
             return _cases()
         if args.command == "run":
             return _run(args)
+        if args.command == "bench":
+            from .bench import cli as bench_cli
+            return bench_cli(args)
     except CaseError as exc:
         print(f"femdem: {exc}", file=sys.stderr)
         return 2

@@ -185,3 +185,18 @@ def test_coupled_against_standalone_modes(femdem):
         assert_checks(s)
         tips[mode] = s["qoi"]["tip_displacement_max"]
     assert max(tips.values()) / min(tips.values()) - 1 < 5e-3
+
+
+def test_bench_speed_against_error(tmp_path, monkeypatch, capsys):
+    """femdem bench: the reference is run once and then cached; errors are relative to it."""
+    import json
+    from coupling.cli import main
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    args = ["bench", "chain_consistency", "--sweep", "clock.substeps=1,2", "--qoi", "tip_displacement_max"]
+    assert main(args + ["--out", str(tmp_path / "b1")]) == 0
+    r = json.loads((tmp_path / "b1" / "speed_error.json").read_text())
+    assert not r["reference"]["cached"] and len(r["points"]) == 2
+    assert all(p["status"] == "ok" and 0 < p["max_rel_error"] < 5e-3 for p in r["points"])
+    assert any(p.get("pareto") for p in r["points"]) and (tmp_path / "b1" / "speed_error.png").exists()
+    assert main(args + ["--out", str(tmp_path / "b2")]) == 0
+    assert json.loads((tmp_path / "b2" / "speed_error.json").read_text())["reference"]["cached"]

@@ -1,0 +1,144 @@
+"""``femdem bench``: speed against error over a sweep of parameters, with a cached reference.
+
+Every sweep point is a normal run (its own run directory under the bench directory); its
+error is the relative difference of each quantity of interest from the reference run (by
+default the same case in ``--mode dem``, the whole domain as particles, or a run with
+``--reference-set`` overrides, e.g. the finest setting). References are cached by their
+resolved parameters, mode and engine, so sweeps reuse them. Writes speed_error.json and
+speed_error.png (wall time against error, the Pareto front marked).
+"""
+from __future__ import annotations
+
+import hashlib
+import itertools
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+
+from .case import load_case
+from .params import CaseError, parse_set
+from .run import execute
+
+
+def _cache_dir() -> Path:
+    return Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "femdem" / "references"
+
+
+def _key(parameters: dict, mode: str, dem: str) -> str:
+    blob = json.dumps({"p": parameters, "mode": mode, "dem": dem}, sort_keys=True, default=str)
+    return hashlib.sha1(blob.encode()).hexdigest()[:20]
+
+
+def parse_sweep(items: list[str]) -> dict[str, list[str]]:
+    """["clock.substeps=1,2,4", ...] -> {"clock.substeps": ["1", "2", "4"]}."""
+    out = {}
+    for item in items:
+        key, sep, values = item.partition("=")
+        if not sep or not values:
+            raise CaseError(f"--sweep {item!r}: expected key=v1,v2,... with a dotted key")
+        out[key.strip()] = [v.strip() for v in values.split(",") if v.strip()]
+    return out
+
+
+def reference(case_name: str, overrides: dict, mode: str, dem: str, out: Path) -> tuple[dict, bool]:
+    """The reference summary (from the cache when the same run was made before)."""
+    case = load_case(case_name, overrides)
+    path = _cache_dir() / f"{_key(case.parameters, mode, dem)}.json"
+    if path.exists():
+        return json.loads(path.read_text()), True
+    code, _, summary = execute(case, mode, dem, out, quiet=True)
+    if code:
+        raise CaseError(f"reference run ({mode}) did not finish: {summary['message']}")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(".tmp")
+    tmp.write_text(json.dumps(summary, default=str))
+    os.replace(tmp, path)
+    return summary, False
+
+
+def pareto(times: np.ndarray, errors: np.ndarray) -> np.ndarray:
+    """Indices of the points no other point beats in both wall time and error."""
+    idx = []
+    for i in range(len(times)):
+        dominated = np.any((times <= times[i]) & (errors <= errors[i]) & ((times < times[i]) | (errors < errors[i])))
+        if not dominated:
+            idx.append(i)
+    return np.array(idx, int)
+
+
+def bench(case_name: str, sweep: dict[str, list[str]], base: dict, ref_mode: str, ref_set: dict, dem: str,
+          mode: str, out: Path, qoi: list[str] | None = None) -> dict:
+    """Run the sweep; qoi: names compared with the reference (default: every qoi both runs
+    report whose name does not end in _rel, since those are already error measures)."""
+    out.mkdir(parents=True, exist_ok=True)
+    if mode != "fem" or ref_mode != "fem":  # import the engine once, so no run pays for it
+        from dem_region.backends import make_backend
+        make_backend(dem).finalize() if dem == "yade" else None
+    ref, cached = reference(case_name, {**base, **ref_set}, ref_mode, dem, out / "reference")
+    keys = list(sweep)
+    points = []
+    for combo in itertools.product(*(sweep[k] for k in keys)):
+        sets = {**base, **dict(zip(keys, combo))}
+        case = load_case(case_name, sets)
+        name = "_".join(f"{k.split('.')[-1]}{v}" for k, v in zip(keys, combo)) or "base"
+        code, _, s = execute(case, mode, dem, out / name, quiet=True)
+        names = qoi or [q for q in s["qoi"] if q in ref["qoi"] and not q.endswith("_rel")]
+        errors = {q: abs(s["qoi"][q] - ref["qoi"][q]) / abs(ref["qoi"][q]) for q in names
+                  if q in s["qoi"] and q in ref["qoi"] and ref["qoi"][q]}
+        points.append({"setting": dict(zip(keys, combo)), "status": s["status"], "wall_s": s["timing_s"]["total"],
+                       "timing_s": s["timing_s"], "qoi": s["qoi"], "rel_error": errors,
+                       "max_rel_error": max(errors.values()) if errors else None})
+    ok = [p for p in points if p["status"] == "ok" and p["max_rel_error"] is not None]
+    front = pareto(np.array([p["wall_s"] for p in ok]), np.array([p["max_rel_error"] for p in ok])) if ok else []
+    for i in front:
+        ok[i]["pareto"] = True
+    result = {"case": case_name, "mode": mode, "dem": dem, "reference": {"mode": ref_mode, "set": ref_set,
+              "cached": cached, "wall_s": ref["timing_s"]["total"], "qoi": ref["qoi"]}, "points": points}
+    tmp = out / "speed_error.json.tmp"
+    tmp.write_text(json.dumps(result, indent=1, default=str))
+    os.replace(tmp, out / "speed_error.json")
+    _plot(result, out / "speed_error.png")
+    return result
+
+
+def _plot(result: dict, path: Path) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    ok = [p for p in result["points"] if p["status"] == "ok" and p["max_rel_error"]]
+    fig, ax = plt.subplots(figsize=(6, 4))
+    if ok:
+        t = [p["wall_s"] for p in ok]
+        e = [p["max_rel_error"] for p in ok]
+        ax.loglog(t, e, "o", label=f"{result['case']} ({result['dem']})")
+        for p, ti, ei in zip(ok, t, e):
+            ax.annotate(",".join(f"{k.split('.')[-1]}={v}" for k, v in p["setting"].items()), (ti, ei), fontsize=7)
+        f = sorted((p["wall_s"], p["max_rel_error"]) for p in ok if p.get("pareto"))
+        if f:
+            ax.loglog(*zip(*f), "k--", lw=0.8, label="Pareto front")
+    ax.axvline(result["reference"]["wall_s"], color="r", lw=0.8, label=f"reference ({result['reference']['mode']})")
+    ax.set(xlabel="wall time [s]", ylabel="max relative error of the qoi", title="speed against error")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def cli(args) -> int:
+    sweep = parse_sweep(args.sweep)
+    base = parse_set(args.set)
+    ref_set = parse_set(args.reference_set)
+    out = Path(args.out or f"runs/bench-{Path(args.case).stem}")
+    if out.exists() and any(out.iterdir()):
+        raise CaseError(f"--out {out}: directory exists and is not empty; allowed: a new or empty directory")
+    r = bench(args.case, sweep, base, args.reference_mode, ref_set, args.dem, args.mode, out, args.qoi or None)
+    print(f"reference: --mode {r['reference']['mode']} {r['reference']['set'] or ''} "
+          f"({'cached' if r['reference']['cached'] else 'run'}, {r['reference']['wall_s']:.2f} s)")
+    for p in r["points"]:
+        err = f"{p['max_rel_error']:.2e}" if p["max_rel_error"] is not None else "n/a"
+        print(f"  {p['setting']}: {p['status']}, {p['wall_s']:.2f} s, max rel. error {err}"
+              f"{'  (Pareto)' if p.get('pareto') else ''}")
+    print(f"  results: {out}/speed_error.json\n  plot:    {out}/speed_error.png")
+    return 0
