@@ -23,7 +23,7 @@ def test_chain_consistency_matches_monolithic(femdem, sets):
     assert set(s["timing_s"]) >= {"fem", "dem", "interface", "io", "orchestrator", "total"}
 
 
-@pytest.mark.parametrize("engine", ["liggghts", "lammps"])
+@pytest.mark.parametrize("engine", ["lammps"])
 def test_engines_not_built_yet_are_refused_clearly(femdem, engine):
     code, s, err = femdem("run", "chain_consistency", "--dem", engine)
     assert code == 2 and s is None

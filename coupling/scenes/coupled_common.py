@@ -49,6 +49,9 @@ def coupled_simulation(p: dict, make_fem: Callable[[np.ndarray], ExplicitDynamic
     fem = make_fem(node_mass)
     try:
         return _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, steps)
+    except NotImplementedError as exc:
+        backend.finalize()
+        raise CaseError(f"--dem {dem}: {exc}") from None
     except BaseException:
         backend.finalize()  # never leave an engine (or its worker process) behind
         raise
@@ -59,6 +62,8 @@ def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, st
     if p["interface.tie"] == "kinematic":
         tie = KinematicTie(itf, backend, scene.mass)
     else:
+        if not hasattr(backend, "add_forces"):
+            raise NotImplementedError("the penalty tie needs added particle forces, not available on this engine yet")
         tie = PenaltyTie(itf, backend, scene.mass, p["interface.penalty"] or 4 * float(scene.kn.max()))
     dt_fem, dt_dem = fem.critical_dt(), min(backend.critical_dt(), tie.critical_dt(fem.m))
     # 0 = automatic: as many substeps as the FEM step allows with the kinematic tie; one with
@@ -98,7 +103,8 @@ def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, st
         close=backend.finalize, versions={dem: backend.version}, timing_correction=clock.timing_correction,
         instability_hint=_hint(p, tie, m, dt, dt_dem),
         guards=fem_guards(fem) + [particles_escaped(backend, scene)],
-        checkpoint=lambda: (clock.checkpoint_state(), backend.checkpoint), restore=clock.restore_state)
+        checkpoint=(lambda: (clock.checkpoint_state(), backend.checkpoint))
+        if getattr(backend, "can_checkpoint", True) else None, restore=clock.restore_state)
     return sim, clock
 
 

@@ -51,6 +51,9 @@ def dem_only(p: dict, scene: DemScene, dem: str, t_end_default: float,
         hook = driver.between if driver else None
         backend.set_dt(dt)
         backend.start(hook)
+    except NotImplementedError as exc:
+        backend.finalize()
+        raise CaseError(f"--dem {dem}: {exc}") from None
     except BaseException:
         backend.finalize()
         raise

@@ -11,7 +11,8 @@ from .base import DemBackend, EngineUnavailable
 # name -> (module, class, what a user does when it is missing)
 _REGISTRY = {
     "yade": ("dem_region.backends.yade", "YadeBackend", "./scripts/setup.sh (Debian packages yade, python3-yade)"),
-    "liggghts": (None, None, "not implemented yet (issue #7)"),
+    "liggghts": ("dem_region.backends.liggghts", "LiggghtsBackend",
+                 "./scripts/setup.sh (Debian packages liggghts, libliggghts-dev)"),
     "lammps": (None, None, "not implemented yet (issue #8)"),
 }
 NAMES = tuple(_REGISTRY)
@@ -24,7 +25,7 @@ def get_backend(name: str) -> type[DemBackend]:
         raise EngineUnavailable(f"--dem {name}: allowed {', '.join(NAMES)}")
     module, cls, fix = _REGISTRY[name]
     if module is None:
-        raise EngineUnavailable(f"--dem {name}: {fix}; available now: yade")
+        raise EngineUnavailable(f"--dem {name}: {fix}; available now: yade, liggghts")
     try:
         return getattr(importlib.import_module(module), cls)
     except ImportError as exc:

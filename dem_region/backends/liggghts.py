@@ -1,0 +1,264 @@
+"""LIGGGHTS-PUBLIC 3.8 adapter (in-process through libliggghts' C API; the only module that
+loads it).
+
+The neutral scene becomes a data file (atom style hybrid granular molecular) with harmonic
+bonds, one bond type per (stiffness, rest length) pair, K = kn / 2 because LAMMPS' harmonic
+energy is K (r - r0)^2. All bonded particles share one molecule and granular contacts inside
+a molecule are excluded (special_bonds does not reach the granular neighbour list), so a
+bond is the only interaction of its pair, as in the YADE adapter. Unbonded particles touch
+through the Hertz model with the scene's restitution. Arrays are zero-copy numpy views of
+LIGGGHTS' x, v, f, omega (atoms keep their order: map array, sort off, one process).
+
+Stepping (velocity Verlet, ``run 1 pre no post no``) leaves on-step velocities; the contract's
+``velocities`` returns the leapfrog half-step ones (v - dt/2 f/m) so both engines feed the
+coupled clock the same time level. Prescribed particles: ``fix store/force`` (their force
+from the rest of the scene) then ``fix setforce 0 0 0`` and a written velocity.
+
+Not available on this engine (refused with a clear message): bond breakage, Cundall damping
+(virtual calibration tests), walls, penalty ties (added forces), checkpoint / restore.
+"""
+from __future__ import annotations
+
+import ctypes
+import os
+import shutil
+import tempfile
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ..scene import DemScene
+
+LIB = "libliggghts.so.3"
+
+
+class LiggghtsBackend:
+    """DEM back-end on one LIGGGHTS instance (several may live in one process)."""
+
+    name = "liggghts"
+    native_laws = ("elastic",)
+    can_checkpoint = False
+
+    def __init__(self):
+        self.lib = ctypes.CDLL(LIB, ctypes.RTLD_GLOBAL)
+        self.lib.lammps_command.restype = ctypes.c_char_p
+        self.lib.lammps_extract_atom.restype = ctypes.c_void_p
+        self.lib.lammps_extract_fix.restype = ctypes.c_void_p
+        self.version = "3.8.0"
+        self.h = None
+
+    # -- set-up ----------------------------------------------------------------------------
+    def _cmd(self, text: str) -> None:
+        for line in text.strip().splitlines():
+            self.lib.lammps_command(self.h, line.strip().encode())
+
+    def _unsupported(self, scene: DemScene) -> str | None:
+        if np.isfinite(scene.bond_strength).any():
+            return "bond breakage"
+        if scene.local_damping:
+            return "Cundall damping (virtual calibration tests)"
+        if scene.walls:
+            return "walls"
+        return None
+
+    def build(self, scene: DemScene) -> None:
+        missing = self._unsupported(scene)
+        if missing:
+            raise NotImplementedError(f"liggghts adapter: {missing} is not available on this engine yet")
+        self.scene = scene
+        self.tmp = Path(tempfile.mkdtemp(prefix="femdem-liggghts-"))
+        # LIGGGHTS ends the process on an input error: its log (in the scene's temp dir, or on
+        # screen with FEMDEM_LIGGGHTS_SCREEN=1) is where the reason is
+        screen = b"stdout" if os.environ.get("FEMDEM_LIGGGHTS_SCREEN") else b"none"
+        args = (ctypes.c_char_p * 5)(b"liggghts", b"-log", str(self.tmp / "log.liggghts").encode(), b"-screen", screen)
+        self.h = ctypes.c_void_p()
+        self.lib.lammps_open_no_mpi(5, args, ctypes.byref(self.h))
+        n = scene.n
+        i, j = scene.bonds.T if len(scene.bonds) else (np.zeros(0, int),) * 2
+        r0 = np.linalg.norm(scene.x[i] - scene.x[j], axis=1)
+        keys = np.round(np.column_stack([scene.kn, r0]), 12)
+        types, btype = np.unique(keys, axis=0, return_inverse=True) if len(keys) else (np.zeros((0, 2)), [])
+        lo, hi = scene.x.min(axis=0) - 10 * scene.radius.max(), scene.x.max(axis=0) + 10 * scene.radius.max()
+        mats, atype = np.unique(np.column_stack([scene.young, scene.poisson]), axis=0, return_inverse=True)
+        lines = ["LIGGGHTS data (femdem)", "", f"{n} atoms", f"{len(scene.bonds)} bonds", f"{len(mats)} atom types",
+                 f"{max(1, len(types))} bond types",
+                 *(f"{a:.17g} {b:.17g} {c}lo {c}hi" for a, b, c in zip(lo, hi, "xyz")), "", "Atoms", ""]
+        mol = 1 if len(scene.bonds) else None
+        lines += [f"{k + 1} {t + 1} {x:.17g} {y:.17g} {z:.17g} {2 * r:.17g} {rho:.17g} {mol or k + 1}"
+                  for k, ((x, y, z), r, rho, t) in enumerate(zip(scene.x, scene.radius, scene.density, atype))]
+        if len(scene.bonds):
+            lines += ["", "Bonds", ""] + [f"{k + 1} {t + 1} {a + 1} {b + 1}"
+                                          for k, (t, (a, b)) in enumerate(zip(btype, scene.bonds))]
+        (self.tmp / "scene.data").write_text("\n".join(lines) + "\n")
+        nt = len(mats)
+        Es = " ".join(f"{E:.17g}" for E in mats[:, 0])
+        nus = " ".join(f"{nu:.17g}" for nu in mats[:, 1])
+        e = " ".join([f"{max(float(scene.restitution), 1e-3):.17g}"] * nt * nt)
+        mu = " ".join([f"{np.tan(np.radians(scene.friction_deg)):.17g}"] * nt * nt)
+        self._cmd(f"""
+            units si
+            hard_particles yes
+            atom_style hybrid granular molecular
+            atom_modify map array sort 0 0
+            boundary f f f
+            newton off
+            communicate single vel yes
+            read_data {self.tmp / 'scene.data'}
+            neighbor {0.2 * scene.radius.min():.17g} bin
+            neigh_modify delay 0
+            fix m1 all property/global youngsModulus peratomtype {Es}
+            fix m2 all property/global poissonsRatio peratomtype {nus}
+            fix m3 all property/global coefficientRestitution peratomtypepair {nt} {e}
+            fix m4 all property/global coefficientFriction peratomtypepair {nt} {mu}
+            pair_style gran model hertz tangential history
+            pair_coeff * *
+        """)
+        if len(scene.bonds):
+            self._cmd("bond_style harmonic\nneigh_modify exclude molecule all")
+            for t, (kn, length) in enumerate(types):
+                self._cmd(f"bond_coeff {t + 1} {kn / 2:.17g} {length:.17g}")
+        self._cmd("fix integ all nve/sphere")
+        if scene.plane:
+            self._cmd("fix plane all setforce NULL NULL 0.0")  # quasi-2D: no out-of-plane motion
+        self.X, self.V, self.F = (self._array(k, 3) for k in ("x", "v", "f"))
+        self.W = self._array("omega", 3)
+        self.ids_order = np.ctypeslib.as_array(ctypes.cast(self.lib.lammps_extract_atom(self.h, b"id"),
+                                                           ctypes.POINTER(ctypes.c_int)), shape=(n,))
+        if not np.array_equal(self.ids_order, np.arange(1, n + 1)):
+            raise RuntimeError("liggghts adapter: atoms are not in id order")
+        self.V[:] = scene.velocity
+        self.mass = scene.mass
+        self._bond_K = types[btype, 0] / 2 if len(scene.bonds) else np.zeros(0)
+        self._bond_r0 = types[btype, 1] if len(scene.bonds) else np.zeros(0)
+        self.prescribed = np.zeros(0, int)
+        self._store = None
+        self._track_damping = not len(scene.bonds) and scene.restitution < 1.0
+        self._dissipated, self._fd_prev = 0.0, np.zeros((n, 3))
+        fixed = scene.groups.get("fixed", np.zeros(0, int))
+        if len(fixed):
+            self._group("fixed", fixed)
+            self._cmd("fix fixed fixed setforce 0 0 0")
+            self.V[fixed] = 0.0
+
+    def _array(self, name: str, cols: int) -> np.ndarray:
+        p = ctypes.cast(self.lib.lammps_extract_atom(self.h, name.encode()), ctypes.POINTER(ctypes.POINTER(ctypes.c_double)))
+        return np.ctypeslib.as_array(p[0], shape=(self.scene.n, cols))
+
+    def _group(self, name: str, ids: np.ndarray) -> None:
+        ids = np.asarray(ids, int) + 1
+        for chunk in np.array_split(ids, max(1, len(ids) // 500)):  # keep command lines short
+            self._cmd(f"group {name} id {' '.join(map(str, chunk.tolist()))}")
+
+    def critical_dt(self) -> float:
+        return self.scene.critical_dt()
+
+    def set_dt(self, dt: float) -> None:
+        self.dt = float(dt)
+        self._cmd(f"timestep {self.dt:.17g}")
+
+    # -- stepping ----------------------------------------------------------------------------
+    def start(self, between: Callable[[], None] | None = None) -> None:
+        self._cmd("run 0")
+        self._refresh_store()
+        if between is not None:
+            between()
+
+    def advance(self, between: Callable[[], None] | None = None) -> None:
+        x_old = self.X.copy() if self._track_damping else None
+        self.lib.lammps_command(self.h, b"run 1 pre no post no")
+        if x_old is not None:
+            self._book_damping(x_old)
+        if between is not None:
+            between()
+
+    def _hertz(self):
+        """(pairs (p, 2), elastic Hertz force on the first of each pair (p, 3), energy J) of the
+        touching unbonded pairs."""
+        R, X = self.scene.radius, self.X
+        pairs = np.array(sorted(cKDTree(X).query_pairs(2 * R.max())), dtype=int).reshape(-1, 2)
+        if not len(pairs):
+            return pairs, np.zeros((0, 3)), 0.0
+        a, b = pairs.T
+        d = X[a] - X[b]
+        dist = np.linalg.norm(d, axis=1)
+        delta = np.maximum(R[a] + R[b] - dist, 0.0)
+        E, nu = self.scene.young, self.scene.poisson
+        Es = 1.0 / ((1 - nu[a] ** 2) / E[a] + (1 - nu[b] ** 2) / E[b])
+        Rs = R[a] * R[b] / (R[a] + R[b])
+        f = (4.0 / 3.0) * Es * np.sqrt(Rs) * delta**1.5
+        energy = float(np.sum((8.0 / 15.0) * Es * np.sqrt(Rs) * delta**2.5))
+        return pairs, (f / dist)[:, None] * d, energy
+
+    def _book_damping(self, x_old: np.ndarray) -> None:
+        """Work of the contact damping over the last step: total force minus the elastic Hertz
+        force, trapezoidal in time (LIGGGHTS does not report it)."""
+        pairs, f_el, _ = self._hertz()
+        F_el = np.zeros_like(self.X)
+        np.add.at(F_el, pairs[:, 0], f_el)
+        np.add.at(F_el, pairs[:, 1], -f_el)
+        f_d = self.F - F_el
+        f_d[self.scene.groups.get("fixed", np.zeros(0, int))] = 0.0
+        self._dissipated -= float(np.sum(0.5 * (f_d + self._fd_prev) * (self.X - x_old)))
+        self._fd_prev = f_d
+
+    # -- interface data ----------------------------------------------------------------------
+    def prescribe(self, ids: np.ndarray, dofs: str = "xyz") -> None:
+        if dofs != "xyz":
+            raise NotImplementedError("liggghts adapter: partial prescriptions (virtual tests) not available yet")
+        self.prescribed = np.asarray(ids, int)
+        self._group("iface", self.prescribed)
+        self._cmd("fix sf iface store/force\nfix hold iface setforce 0 0 0")
+        self._store = None
+
+    def _refresh_store(self) -> None:
+        if len(self.prescribed):
+            p = ctypes.cast(self.lib.lammps_extract_fix(self.h, b"sf", 1, 2, 0, 0),
+                            ctypes.POINTER(ctypes.POINTER(ctypes.c_double)))
+            self._store = np.ctypeslib.as_array(p[0], shape=(self.scene.n, 3))
+
+    def set_velocities(self, ids: np.ndarray, v: np.ndarray) -> None:
+        self.V[np.asarray(ids, int)] = v
+
+    def forces(self, ids: np.ndarray) -> np.ndarray:
+        ids = np.asarray(ids, int)
+        out = self.F[ids].copy()
+        if self._store is not None:
+            held = np.isin(ids, self.prescribed)
+            out[held] = self._store[ids[held]]
+        return out
+
+    def positions_of(self, ids: np.ndarray) -> np.ndarray:
+        return self.X[np.asarray(ids, int)].copy()
+
+    def positions(self) -> np.ndarray:
+        return self.X.copy()
+
+    def velocities(self) -> np.ndarray:
+        """Leapfrog half-step velocities v_{k-1/2} = v_k - dt/2 f_k / m (held particles: as written)."""
+        v = self.V - 0.5 * self.dt * self.F / self.mass[:, None]
+        v[self.prescribed] = self.V[self.prescribed]
+        return v
+
+    def energies(self) -> dict[str, float]:
+        m = self.mass.copy()
+        m[self.prescribed] = 0.0
+        m[self.scene.groups.get("fixed", np.zeros(0, int))] = 0.0
+        I = 0.4 * m * self.scene.radius**2
+        kinetic = 0.5 * float(np.einsum("n,ni,ni->", m, self.V, self.V) + np.einsum("n,ni,ni->", I, self.W, self.W))
+        elastic = 0.0
+        if len(self.scene.bonds):
+            i, j = self.scene.bonds.T
+            r = np.linalg.norm(self.X[i] - self.X[j], axis=1)
+            elastic = float(np.sum(self._bond_K * (r - self._bond_r0) ** 2))
+        else:  # Hertz contacts: (8/15) E* sqrt(R*) delta^(5/2) per touching pair
+            elastic = self._hertz()[2]
+        return {"kinetic": kinetic, "elastic": elastic, "dissipated": self._dissipated}
+
+    def finalize(self) -> None:
+        if self.h is not None:
+            self.lib.lammps_close(self.h)
+            self.h = None
+        if getattr(self, "tmp", None):
+            shutil.rmtree(self.tmp, ignore_errors=True)
