@@ -32,6 +32,7 @@ class Param:
     open_low: bool = False
     open_high: bool = False
     choices: tuple[str, ...] | None = None
+    plausible: tuple[float, float] | None = None  # SI range outside which a value is a unit slip
 
     def allowed(self) -> str:
         if self.choices is not None:
@@ -73,6 +74,9 @@ class Param:
             raise bad
         if self.high is not None and (value > self.high or (self.open_high and value == self.high)):
             raise bad
+        if self.plausible and not self.plausible[0] <= value <= self.plausible[1]:
+            raise CaseError(f"{key} = {value!r}: implausible in SI units [{self.unit}]; allowed "
+                            f"{self.plausible[0]:g} to {self.plausible[1]:g} (case files are SI: Pa, kg/m^3, m, s)")
         return value
 
 
@@ -95,9 +99,21 @@ def positive(default: float, doc: str, unit: str) -> Param:
     return Param(default, doc, "float", unit, low=0.0, open_low=True)
 
 
+MODULUS_SI = (1e6, 1e13)  # Pa: rubber to diamond; a value outside it was not given in Pa
+DENSITY_SI = (100.0, 3e4)  # kg/m^3: the solids of this project (a g/cm^3 slip lands below)
+
+
+def modulus(default: float, doc: str) -> Param:
+    return Param(default, doc, "float", "Pa", low=0.0, open_low=True, plausible=MODULUS_SI)
+
+
+def density(default: float, doc: str = "density") -> Param:
+    return Param(default, doc, "float", "kg/m^3", low=0.0, open_low=True, plausible=DENSITY_SI)
+
+
 def isotropic_material(E: float, rho: float, poisson: float | None = None) -> dict[str, Param]:
     """material.E, material.rho (and material.poisson) with the given defaults."""
-    out = {"material.E": positive(E, "Young's modulus", "Pa"), "material.rho": positive(rho, "density", "kg/m^3")}
+    out = {"material.E": modulus(E, "Young's modulus"), "material.rho": density(rho)}
     if poisson is not None:
         out["material.poisson"] = Param(poisson, "Poisson ratio", low=-0.99, high=0.49)
     return out

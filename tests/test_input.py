@@ -79,3 +79,14 @@ def test_resolve_rejects_unknown_and_out_of_range(given_values):
         assert not bad and set(out) == set(schema)
     except CaseError:
         assert bad
+
+
+@pytest.mark.parametrize("setting, words", [
+    ("material.rho=7.8", ["material.rho", "implausible", "kg/m^3"]),      # g/cm^3 by mistake
+    ("material.E=200000", ["material.E", "implausible", "Pa"]),          # MPa by mistake
+])
+def test_unit_slips_are_caught(femdem, setting, words):
+    code, s, err = femdem("run", "bar_wave", "--set", setting)
+    assert code == 2 and s is None
+    for w in words:
+        assert w in err

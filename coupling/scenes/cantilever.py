@@ -14,7 +14,7 @@ from fem_region.explicit import ExplicitDynamics, NodalLoad, PrescribedMotion
 from fem_region.modal import lowest_modes
 
 from ..checks import check
-from ..params import Param, positive
+from ..params import Param, density, modulus, positive
 from .common import FEM_OPTIONS, fem_only, make_region
 
 NAME = "cantilever"
@@ -23,12 +23,12 @@ MODES = ("fem",)
 KAPPA = 5.0 / 6.0
 PARAMETERS = {
     # graphite/epoxy of the seed paper's Table 1; G13 is not in the table (typical value)
-    "material.E11": positive(156e9, "fibre-direction modulus", "Pa"),
-    "material.E22": positive(9.09e9, "transverse modulus", "Pa"),
+    "material.E11": modulus(156e9, "fibre-direction modulus"),
+    "material.E22": modulus(9.09e9, "transverse modulus"),
     "material.nu12": Param(0.228, "major Poisson ratio", low=0.0, high=0.49),
     "material.nu23": Param(0.4, "transverse Poisson ratio", low=0.0, high=0.49),
-    "material.G13": positive(6.9e9, "transverse shear modulus (x-thickness plane)", "Pa"),
-    "material.rho": positive(1540.0, "density", "kg/m^3"),
+    "material.G13": modulus(6.9e9, "transverse shear modulus (x-thickness plane)"),
+    "material.rho": density(1540.0),
     "geometry.length": positive(0.1, "free length", "m"),
     "geometry.thickness": positive(0.005, "beam depth (in plane)", "m"),
     "geometry.width": positive(0.01, "beam width (out of plane)", "m"),
