@@ -45,6 +45,12 @@ def _parser() -> argparse.ArgumentParser:
     b.add_argument("--reference-set", action="append", default=[], metavar="KEY=VALUE",
                    help="overrides of the reference run (e.g. the finest setting)")
     b.add_argument("--qoi", action="append", default=[], help="quantity of interest to compare (repeatable)")
+    c = sub.add_parser("compare", help="the same case on several DEM engines, side by side")
+    c.add_argument("case")
+    c.add_argument("--dem", required=True, help="comma-separated engines, e.g. yade,liggghts")
+    c.add_argument("--mode", default=None)
+    c.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    c.add_argument("--out", default=None)
     b.add_argument("--out", default=None)
     return p
 
@@ -59,6 +65,9 @@ def main(argv: list[str] | None = None) -> int:
             return _cases()
         if args.command == "run":
             return _run(args)
+        if args.command == "compare":
+            from .compare import cli as compare_cli
+            return compare_cli(args)
         if args.command == "bench":
             from .bench import cli as bench_cli
             return bench_cli(args)

@@ -72,3 +72,19 @@ def test_liggghts_low_restitution_deviates():
 def test_what_liggghts_cannot_do_yet_is_refused(femdem, args):
     code, s, err = femdem("run", *args, "--dem", "liggghts")
     assert code == 2 and s is None and "liggghts" in err and len(err.strip().splitlines()) == 1
+
+
+def test_compare_engines(tmp_path, capsys):
+    import json
+    from coupling.cli import main
+    assert main(["compare", "chain_consistency", "--dem", "yade,liggghts", "--out", str(tmp_path / "c")]) == 0
+    r = json.loads((tmp_path / "c" / "compare.json").read_text())
+    assert r["engines"] == ["yade", "liggghts"] and all(r["checks_passed"].values())
+    row = {x["qoi"]: x for x in r["rows"]}["tip_displacement_max"]
+    assert row["max_rel_diff"] < 1e-9  # both engines reproduce the same discrete chain
+    assert "max rel. diff" in capsys.readouterr().out
+
+
+def test_compare_needs_two_engines(femdem):
+    code, _, err = femdem("compare", "chain_consistency", "--dem", "yade")
+    assert code == 2 and "two or more" in err

@@ -1,0 +1,64 @@
+"""``femdem compare CASE --dem a,b``: the same case on several engines, side by side.
+
+Writes compare.json and prints a table: every quantity of interest per engine, its largest
+relative difference from the first engine, the checks' verdicts and the wall time per engine.
+"""
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+from .case import ENGINES, load_case
+from .params import CaseError, parse_set
+from .run import execute
+
+
+def compare(case_name: str, engines: list[str], sets: dict, mode: str | None, out: Path) -> dict:
+    bad = [e for e in engines if e not in ENGINES]
+    if bad or len(engines) < 2:
+        raise CaseError(f"--dem {','.join(engines)}: allowed two or more of {', '.join(ENGINES)}, comma separated")
+    case = load_case(case_name, sets)
+    mode = mode or case.scene.MODES[0]
+    if mode == "fem":
+        raise CaseError(f"--mode {mode}: an FEM-only run uses no DEM engine; allowed coupled or dem")
+    out.mkdir(parents=True, exist_ok=True)
+    runs = {}
+    for engine in engines:
+        code, _, s = execute(load_case(case_name, sets), mode, engine, out / engine, quiet=True)
+        runs[engine] = s
+    first = engines[0]
+    rows = []
+    for q in runs[first]["qoi"]:
+        values = {e: runs[e]["qoi"].get(q) for e in engines}
+        ref = values[first]
+        diff = max((abs(v - ref) / abs(ref) for v in values.values() if v is not None and ref), default=0.0)
+        rows.append({"qoi": q, "values": values, "max_rel_diff": diff})
+    result = {"case": case.name, "mode": mode, "engines": engines, "rows": rows,
+              "status": {e: runs[e]["status"] for e in engines},
+              "checks_passed": {e: all(c["passed"] for c in runs[e]["checks"].values()) for e in engines},
+              "wall_s": {e: runs[e]["timing_s"]["total"] for e in engines},
+              "dem_s": {e: runs[e]["timing_s"].get("dem", 0.0) for e in engines}}
+    tmp = out / "compare.json.tmp"
+    tmp.write_text(json.dumps(result, indent=1, default=str))
+    os.replace(tmp, out / "compare.json")
+    return result
+
+
+def cli(args) -> int:
+    out = Path(args.out or f"runs/compare-{Path(args.case).stem}")
+    if out.exists() and any(out.iterdir()):
+        raise CaseError(f"--out {out}: directory exists and is not empty; allowed: a new or empty directory")
+    r = compare(args.case, [e.strip() for e in args.dem.split(",") if e.strip()], parse_set(args.set), args.mode, out)
+    width = max(len(row["qoi"]) for row in r["rows"]) if r["rows"] else 4
+    print(f"{r['case']} ({r['mode']}):")
+    print(f"  {'qoi':{width}s}  " + "  ".join(f"{e:>14s}" for e in r["engines"]) + "  max rel. diff")
+    for row in r["rows"]:
+        vals = "  ".join(f"{row['values'][e]:14.6g}" if row["values"][e] is not None else f"{'n/a':>14s}"
+                         for e in r["engines"])
+        print(f"  {row['qoi']:{width}s}  {vals}  {row['max_rel_diff']:.2e}")
+    print(f"  {'status':{width}s}  " + "  ".join(f"{r['status'][e]:>14s}" for e in r["engines"]))
+    print(f"  {'checks passed':{width}s}  " + "  ".join(f"{str(r['checks_passed'][e]):>14s}" for e in r["engines"]))
+    print(f"  {'wall time [s]':{width}s}  " + "  ".join(f"{r['wall_s'][e]:14.3f}" for e in r["engines"]))
+    print(f"  results: {out}/compare.json")
+    return 0 if all(s == "ok" for s in r["status"].values()) else 3
