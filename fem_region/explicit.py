@@ -110,6 +110,11 @@ class ExplicitDynamics:
         self._reaction_prev = np.zeros(self._prescribed.size)
         self._ke_prev = 0.0
 
+    def add_nodal_mass(self, extra: np.ndarray) -> None:
+        """Add (n_nodes,) kg at the nodes (interface particle masses shared by a tie)."""
+        self.m = self.m + extra
+        self.ledger.kinetic = self.kinetic_energy()
+
     def set_initial_velocity(self, v: np.ndarray) -> None:
         """v: (n_nodes, dim) m/s at t = 0."""
         self.state.v[:] = v

@@ -27,26 +27,23 @@ COUPLING: dict[str, Param] = {
 }
 
 
-def coupled_simulation(p: dict, make_fem: Callable[[np.ndarray], ExplicitDynamics], scene: DemScene,
+def coupled_simulation(p: dict, make_fem: Callable[[np.ndarray | None], ExplicitDynamics], scene: DemScene,
                        dem: str, t_end_default: float, history_every: int = 0, steps: int = 0):
-    """(Simulation, KinematicTie) for a FEM far field made by ``make_fem(extra_mass)`` and a
+    """(Simulation, CoupledClock) for a FEM far field made by ``make_fem(None)`` and a
     DEM ``scene`` whose group "interface" is slaved to the FEM. steps: FEM steps (default
     from t_end); history_every: FEM steps between samples (default from output.history_every)."""
+    fem = make_fem(None)  # built once; the tie's node masses are added below
     try:
-        backend = make_backend(dem, p["dem.process"])
-    except EngineUnavailable as exc:
-        raise CaseError(str(exc)) from None
-    probe_fem = make_fem(None)
-    try:
-        itf = TransitionInterface.build(probe_fem.region, scene.x, scene.groups.get("interface", np.zeros(0, int)))
+        itf = TransitionInterface.build(fem.region, scene.x, scene.groups.get("interface", np.zeros(0, int)))
     except InterfaceError as exc:
         raise CaseError(f"interface: {exc}") from None
     if p["interface.tie"] == "kinematic":
         scene = scene.without_bonds_within(itf.ids)  # the FEM carries the band's stiffness
-        node_mass = itf.share_mass(scene.mass[itf.ids])
-    else:
-        node_mass = None
-    fem = make_fem(node_mass)
+        fem.add_nodal_mass(itf.share_mass(scene.mass[itf.ids]))
+    try:  # the engine last, so a bad interface never leaves an engine or worker behind
+        backend = make_backend(dem, p["dem.process"])
+    except EngineUnavailable as exc:
+        raise CaseError(str(exc)) from None
     try:
         return _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, steps)
     except NotImplementedError as exc:
