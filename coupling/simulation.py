@@ -15,7 +15,7 @@ from typing import Callable
 
 import numpy as np
 
-TIMERS = ("fem", "dem", "interface", "io", "orchestrator")
+TIMERS = ("fem", "dem", "interface", "laws", "io", "orchestrator")  # laws: bond laws the coupling layer evaluates
 
 
 class Instability(RuntimeError):

@@ -187,6 +187,11 @@ class ExplicitDynamics:
         self.f_int = f_int
         self._u_at_forces, self._t_at_forces = s.u.copy(), s.t  # the ledger's time level
 
+    def reaction(self, dofs: np.ndarray) -> float:
+        """N, sum of the support reactions on flat DOFs ``dofs`` (all prescribed) at the last
+        force evaluation: what the supports apply beyond the residual force."""
+        return float(self._reaction_prev[np.isin(self._prescribed, dofs)].sum())
+
     def _contact(self, du: np.ndarray) -> np.ndarray:
         """Penalty contact forces on the surface nodes; impactor accelerations; contact ledger."""
         S, r = self._surface, self.region

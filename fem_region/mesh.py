@@ -40,6 +40,30 @@ def rectangle(xs: np.ndarray, ys: np.ndarray, element: str = "quad4") -> skfem.M
     return ELEMENTS[element].mesh_cls.init_tensor(np.asarray(xs, float), np.asarray(ys, float))
 
 
+def cut_rectangle(xs: np.ndarray, ys: np.ndarray, keep, crack_y: float | None = None,
+                  crack_x_max: float = -np.inf) -> skfem.Mesh:
+    """Quad4 mesh on the lines xs, ys (m) with holes and a crack: cells whose centre (xc, yc)
+    fails ``keep(xc, yc)`` are left out; nodes on the line y = crack_y with x <= crack_x_max
+    are doubled so the cells above and below the line do not share them (a traction-free crack)."""
+    xs, ys = np.asarray(xs, float), np.asarray(ys, float)
+    m = rectangle(xs, ys, "quad4")
+    p, t = m.p.copy(), m.t.copy()
+    centre = p[:, t].mean(axis=1)
+    t = t[:, np.array([bool(keep(cx, cy)) for cx, cy in centre.T])]
+    if crack_y is not None:
+        tol = 1e-9 * (np.ptp(xs) + np.ptp(ys))
+        on = np.flatnonzero((np.abs(p[1] - crack_y) < tol) & (p[0] <= crack_x_max + tol))
+        twin = np.arange(p.shape[1])
+        twin[on] = p.shape[1] + np.arange(on.size)
+        p = np.hstack([p, p[:, on]])
+        above = p[1, t].mean(axis=0) > crack_y
+        t[:, above] = twin[t[:, above]]
+    used = np.unique(t)
+    renum = np.full(p.shape[1], -1)
+    renum[used] = np.arange(used.size)
+    return skfem.MeshQuad1(np.ascontiguousarray(p[:, used]), np.ascontiguousarray(renum[t]))
+
+
 def box(xs: np.ndarray, ys: np.ndarray, zs: np.ndarray, element: str = "hex8") -> skfem.Mesh:
     """Tensor-product 3D mesh; element 'hex8' or 'tet4'."""
     if element not in ("hex8", "tet4"):

@@ -28,7 +28,7 @@ COUPLING: dict[str, Param] = {
 
 
 def coupled_simulation(p: dict, make_fem: Callable[[np.ndarray | None], ExplicitDynamics], scene: DemScene,
-                       dem: str, t_end_default: float, history_every: int = 0, steps: int = 0):
+                       dem: str, t_end_default: float, history_every: int = 0, steps: int = 0, laws: tuple = ()):
     """(Simulation, CoupledClock) for a FEM far field made by ``make_fem(None)`` and a
     DEM ``scene`` whose group "interface" is slaved to the FEM. steps: FEM steps (default
     from t_end); history_every: FEM steps between samples (default from output.history_every)."""
@@ -45,7 +45,7 @@ def coupled_simulation(p: dict, make_fem: Callable[[np.ndarray | None], Explicit
     except EngineUnavailable as exc:
         raise CaseError(str(exc)) from None
     try:
-        return _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, steps)
+        return _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, steps, laws)
     except NotImplementedError as exc:
         backend.finalize()
         raise CaseError(f"--dem {dem}: {exc}") from None
@@ -54,7 +54,7 @@ def coupled_simulation(p: dict, make_fem: Callable[[np.ndarray | None], Explicit
         raise
 
 
-def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, steps):
+def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, steps, laws):
     backend.build(scene)
     if p["interface.tie"] == "kinematic":
         tie = KinematicTie(itf, backend, scene.mass)
@@ -62,7 +62,8 @@ def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, st
         if not hasattr(backend, "add_forces"):
             raise NotImplementedError("the penalty tie needs added particle forces, not available on this engine yet")
         tie = PenaltyTie(itf, backend, scene.mass, p["interface.penalty"] or 4 * float(scene.kn.max()))
-    dt_fem, dt_dem = fem.critical_dt(), min(backend.critical_dt(), tie.critical_dt(fem.m))
+    dt_fem, dt_dem = fem.critical_dt(), min(backend.critical_dt(), tie.critical_dt(fem.m),
+                                            *(law_critical_dt(b, scene) for b in laws))
     # 0 = automatic: as many substeps as the FEM step allows with the kinematic tie; one with
     # the penalty tie, whose stiff spring mode makes impulse time stepping resonate when the
     # FEM step is near a multiple of its period (measured: unstable at m = 4, k = 2e8 N/m)
@@ -74,7 +75,9 @@ def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, st
     if dt / m > dt_dem:
         raise CaseError(f"clock.dt = {p['clock.dt']:g}: the DEM substep dt/{m} is above the DEM stable step "
                         f"{dt_dem:.4g} s; allowed <= {m * dt_dem:.4g} s")
-    clock = CoupledClock(fem, backend, tie, dt, m)
+    if laws and not hasattr(backend, "add_forces"):
+        raise NotImplementedError("bond laws evaluated by the coupling layer need added particle forces")
+    clock = CoupledClock(fem, backend, tie, dt, m, laws=laws)
     every = history_every or p["output.history_every"] or max(1, n // 1000)
     clock.snapshot_every, clock.last_window = every, n
     region = fem.region
@@ -103,6 +106,13 @@ def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, st
         checkpoint=(lambda: (clock.checkpoint_state(), backend.checkpoint))
         if getattr(backend, "can_checkpoint", True) else None, restore=clock.restore_state)
     return sim, clock
+
+
+def law_critical_dt(bonds, scene: DemScene) -> float:
+    """Stable step (s) of the law bonds' penalty alone (Gershgorin: k (1/m_i + 1/m_j))."""
+    k = bonds.law.K * bonds.area
+    m = scene.mass[bonds.pairs]
+    return float(2.0 / np.sqrt(np.max(k * (1 / m[:, 0] + 1 / m[:, 1])))) if len(k) else np.inf
 
 
 def _hint(p: dict, tie, m: int, dt: float, dt_dem_stable: float) -> str:

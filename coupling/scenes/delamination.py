@@ -1,0 +1,211 @@
+"""Split-beam specimens (DCB, ENF) as coupled problems: FEM arms, the crack path as DEM.
+
+Geometry (plane stress slice of thickness t = d, the particle spacing; every force is
+reported for the whole width b by the factor b / t, exact for this linear-in-thickness model):
+
+      y = 2h  +----------------------------------------------------------+
+              |                FEM upper arm (orthotropic ply)           |
+      h + d   +--------------+ o o o o o o o o o o o o o o o o o o +-----+   o at h + 1.5 d
+              | FEM band     | . . . . . . DEM window . . . . . . |     |   . at h + 0.5 d
+          h   |--- crack ----| - - - - - - (law bonds) - - - - - - | FEM |
+              | FEM band     | . . . . . . . . . . . . . . . . . .|     |   . at h - 0.5 d
+      h - d   +--------------+ o o o o o o o o o o o o o o o o o o +-----+   o at h - 1.5 d
+              |                FEM lower arm                             |
+          0   +----------------------------------------------------------+
+              0             x_a          a0                       x_b    L
+
+The DEM window [x_a, x_b] holds four rows of particles on a square lattice of spacing d. The
+outer rows (o) sit half a spacing inside the FEM arms and are tied to them; the inner rows (.)
+are free, so each free row's axial bonds stand for exactly the strip d thick between the FEM
+face and the mid-plane (placing the tied rows on the FEM face instead leaves a half strip to
+be lumped on the free row, which over-stiffens the arms in bending: measured 3 % more
+compliance error per 6 mm of window). Bonds: axial k_x, k_y and two diagonals k_2 per cell,
+the closed form of calibration.py: C11 = (k_x + k_2)/t = E11 + G13^2/E22,
+C22 = (k_y + k_2)/t = E22, C66 = k_2/t = G13, so the uniaxial moduli are E11 and about E22.
+Across the mid-plane the vertical pairs are joined by the seed's interlaminar law
+(HashinCohesiveLaw, evaluated by the coupling layer on any engine) with the penalty
+K = E22 / d of the material it replaces; pairs behind a0 start fully debonded (they keep
+compressive contact with friction: the crack faces of the ENF). Left of x_a the band is FEM,
+cut along y = h (the initial crack); right of x_b it is intact.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from dem_region.law_bonds import LawBonds
+from dem_region.laws import MIXED_MODE, HashinCohesiveLaw
+from dem_region.scene import DemScene
+from fem_region import materials, mesh
+from fem_region.explicit import ExplicitDynamics
+
+from ..params import CaseError, Param, density, modulus, positive
+from .common import FEM_OPTIONS, make_region
+
+# AS4/PEEK, the delamination benchmark material of Camanho & Davila (NASA/TM-2002-211737) and
+# Turon et al. (2007), and their DCB specimen: b = 25.4 mm, h = 1.56 mm, a0 = 32.9 mm, L = 102 mm
+PARAMETERS: dict[str, Param] = {
+    "material.E11": modulus(122.7e9, "ply modulus along the fibres (beam axis)"),
+    "material.E22": modulus(10.1e9, "transverse ply modulus (through the thickness)"),
+    "material.G13": modulus(5.5e9, "transverse shear modulus (x-y plane of the slice)"),
+    "material.nu12": Param(0.25, "major Poisson ratio", low=0.0, high=0.49),
+    "material.rho": density(1570.0, "ply density"),
+    "geometry.arm_thickness": positive(1.56e-3, "thickness h of each arm", "m"),
+    "geometry.width": positive(25.4e-3, "specimen width b (out of plane)", "m"),
+    "geometry.length": positive(102e-3, "specimen length", "m"),
+    "interface.GIc": Param(969.0, "mode I critical energy release rate", unit="J/m^2", low=0.0, open_low=True),
+    "interface.GIIc": Param(1719.0, "mode II critical energy release rate", unit="J/m^2", low=0.0, open_low=True),
+    "interface.Z0": positive(80e6, "interlaminar normal strength", "Pa"),
+    "interface.R0": positive(100e6, "interlaminar shear strength", "Pa"),
+    "interface.eta": Param(2.284, "B-K (or power-law) exponent", low=0.5, high=10.0),
+    "interface.mixed_mode": Param("bk", "mixed-mode criterion", kind="str", choices=MIXED_MODE),
+    "interface.friction": Param(0.0, "Coulomb friction of debonded faces in contact", low=0.0, high=2.0),
+    "particle.radius": positive(0.13e-3, "DEM particle radius r (spacing d = 2r)", "m"),
+    "mesh.elements_through": Param(3, "FEM elements through each arm outside the band", kind="int", low=1, high=40),
+    "mesh.element_length": positive(0.0, "FEM element length along the beam; 0 = 2 d", "m"),
+    "load.ramp_time": Param(0.0, "time over which the load-point speed ramps up; 0 = two periods of the "
+                            "cracked arm", unit="s", low=0.0),
+    **{k: v for k, v in FEM_OPTIONS.items() if k not in ("mesh.element", "fem.hypothesis")},
+    "damping.ratio": Param(0.1, "mass-proportional damping, fraction of critical at the loaded arm's "
+                           "first mode (keeps the quasi-static response free of ringing)", low=0.0, high=1.0),
+}
+
+
+def chi(p: dict) -> float:
+    """Crack-length correction factor of corrected beam theory (Hashemi, Kinloch & Williams 1990)."""
+    E11, E22, G13 = p["material.E11"], p["material.E22"], p["material.G13"]
+    gamma = 1.18 * np.sqrt(E11 * E22) / G13
+    return float(np.sqrt(E11 / (11 * G13) * (3 - 2 * (gamma / (1 + gamma)) ** 2)))
+
+
+@dataclass
+class Specimen:
+    """What a split-beam scene needs: the FEM factory, the DEM scene, the law bonds and the
+    node sets (flat x / y DOF indices) for supports and loads."""
+
+    make_fem: object
+    scene: DemScene
+    bonds: LawBonds
+    t: float  # slice thickness, m
+    width_factor: float  # b / t
+    region: object
+    upper_end: np.ndarray  # nodes of the upper arm's face x = 0
+    lower_end: np.ndarray
+    omega_arm: float  # first bending mode of the loaded (cracked) arm, rad/s
+
+
+def slice_ply(p: dict) -> np.ndarray:
+    """Plane-stress stiffness (3, 3) Pa of the ply with the fibres along x."""
+    E11, E22, G13, nu = p["material.E11"], p["material.E22"], p["material.G13"], p["material.nu12"]
+    return materials.plane_stress(materials.orthotropic(E11, E22, E22, nu, nu, 0.4, G13, G13, E22 / 2.8))
+
+
+def build_specimen(p: dict, a0: float, x_a: float, x_b: float, omega_arm: float,
+                   first_bond_x: float | None = None) -> Specimen:
+    """Mesh, DEM window [x_a, x_b] (rounded to whole spacings), law bonds debonded for x < a0."""
+    h, L = p["geometry.arm_thickness"], p["geometry.length"]
+    r = p["particle.radius"]
+    d = 2 * r
+    band = d  # half-thickness of the window cut out of the FEM
+    if 1.5 * d >= 0.75 * h:
+        raise CaseError(f"particle.radius = {r:g}: the DEM band (3 d = {3 * d:g} m) must be thinner than the arms "
+                        f"(h = {h:g} m); allowed < {h / 4:g} m")
+    E11, E22, G13 = p["material.E11"], p["material.E22"], p["material.G13"]
+    if G13 >= E22:
+        raise CaseError(f"material.G13 = {G13:g}: the square lattice needs G13 < E22 = {E22:g} Pa")
+    n_win = max(4, int(round((x_b - x_a) / d)))
+    x_b = min(x_a + n_win * d, L)
+    n_win = int(round((x_b - x_a) / d))
+    ex = p["mesh.element_length"] or 2 * d
+    # x lines: graded into the window's ends, the window itself at the particle spacing's multiple
+    def line(a, b):
+        return np.linspace(a, b, max(1, int(np.ceil((b - a) / ex - 1e-9))) + 1) if b > a + 1e-12 else np.array([a])
+    xs = np.unique(np.concatenate([line(0.0, x_a), line(x_a, x_b), line(x_b, L)]))
+    nt = p["mesh.elements_through"]
+    ys = np.unique(np.concatenate([np.linspace(0, h - band, nt + 1), [h], np.linspace(h + band, 2 * h, nt + 1)]))
+    tol = 1e-9 * L
+    m = mesh.cut_rectangle(xs, ys, lambda cx, cy: not (x_a - tol < cx < x_b + tol and abs(cy - h) < band),
+                           crack_y=h, crack_x_max=x_a if x_a > 0 else -np.inf)
+    t = d
+    D = slice_ply(p)
+    rho = p["material.rho"]
+    region = make_region(m, p, D, rho, t)
+
+    # DEM window: columns x_a + k d, rows at h -+ 1.5 d (tied) and h -+ 0.5 d (free)
+    cols = x_a + d * np.arange(n_win + 1)
+    rows = h + d * np.array([-1.5, -0.5, 0.5, 1.5])
+    X, Y = np.meshgrid(cols, rows, indexing="ij")
+    x = np.column_stack([X.ravel(), Y.ravel(), np.zeros(X.size)])
+    col, row = np.meshgrid(np.arange(n_win + 1), np.arange(4), indexing="ij")
+    col, row = col.ravel(), row.ravel()
+    idx = lambda c, k: c * 4 + k
+    tied = (row == 0) | (row == 3) | (col == n_win) | ((col == 0) & (x_a > 0))
+    kx = (E11 + G13**2 / E22 - G13) * t
+    ky = (E22 - G13) * t
+    k2 = G13 * t
+    pairs, ks = [], []
+    for c in range(n_win + 1):
+        for k in range(4):
+            if c < n_win:
+                pairs.append((idx(c, k), idx(c + 1, k)))
+                ks.append(kx)
+            if k < 3 and k != 1:  # vertical, not across the mid-plane
+                pairs.append((idx(c, k), idx(c, k + 1)))
+                ks.append(ky)
+            if c < n_win and k < 3 and k != 1:  # diagonals of the cell
+                pairs += [(idx(c, k), idx(c + 1, k + 1)), (idx(c + 1, k), idx(c, k + 1))]
+                ks += [k2, k2]
+    sphere_rho = rho * d**3 / (4.0 / 3.0 * np.pi * r**3)
+    scene = DemScene(x, r, sphere_rho, np.array(pairs), kn=np.array(ks), ks=0.0, plane=True, young=E22,
+                     groups={"interface": np.flatnonzero(tied)})
+
+    K = E22 / d
+    law = HashinCohesiveLaw(K=K, Z0=p["interface.Z0"], R0=p["interface.R0"], GIc=p["interface.GIc"],
+                            GIIc=p["interface.GIIc"], eta=p["interface.eta"], mixed_mode=p["interface.mixed_mode"])
+    lower, upper = idx(np.arange(n_win + 1), 1), idx(np.arange(n_win + 1), 2)
+    area = np.full(n_win + 1, d * t)
+    area[[0, -1]] *= 0.5  # end columns carry half a spacing
+    bonds = LawBonds(np.column_stack([lower, upper]), x, np.tile([0.0, 1.0, 0.0], (n_win + 1, 1)), area, law,
+                     friction=p["interface.friction"])
+    bonds.damage[cols < a0 - 1e-9 * d] = 1.0  # the initial crack: faces in contact only
+    bonds.t_failed[cols < a0 - 1e-9 * d] = 0.0
+
+    cells_above = region.mesh.t[:, region.mesh.p[1, region.mesh.t].mean(axis=0) > h]
+    above = np.zeros(region.n_nodes, bool)
+    above[np.unique(cells_above)] = True
+    end = region.X[:, 0] < tol
+    return Specimen(make_fem=None, scene=scene, bonds=bonds, t=t, width_factor=p["geometry.width"] / t,
+                    region=region, upper_end=np.flatnonzero(end & above), lower_end=np.flatnonzero(end & ~above),
+                    omega_arm=omega_arm)
+
+
+def crack_tip(bonds: LawBonds) -> float:
+    """x (m) of the furthest fully debonded pair along the mid-plane."""
+    failed = bonds.failed()
+    return float(bonds.X[bonds.pairs[failed, 0], 0].max()) if failed.any() else float("nan")
+
+
+def peak_before_growth(P: np.ndarray, tip: np.ndarray, a0: float, run: float) -> int:
+    """Index of the largest load before the crack has run ``run`` m beyond a0 (the dynamic
+    ringing after an unstable jump is not a peak of the quasi-static response)."""
+    grown = np.flatnonzero(np.nan_to_num(tip, nan=-np.inf) > a0 + run)
+    end = grown[0] if grown.size else len(P)
+    return int(np.argmax(P[: max(end, 1)]))
+
+
+def damping_alpha(p: dict, omega: float) -> float:
+    """Mass-proportional damping coefficient (1/s) for the ratio damping.ratio at omega."""
+    return 2.0 * p["damping.ratio"] * omega
+
+
+def cantilever_omega(p: dict, a: float) -> float:
+    """First bending frequency (rad/s) of one arm as a cantilever of length a."""
+    h, E, rho = p["geometry.arm_thickness"], p["material.E11"], p["material.rho"]
+    return 1.8751**2 * np.sqrt(E * h**2 / (12 * rho)) / a**2
+
+
+def fem_factory(spec: Specimen, supports, alpha: float):
+    def make(extra_mass):
+        return ExplicitDynamics(spec.region, supports=supports, alpha=alpha, extra_mass=extra_mass)
+    return make

@@ -1,0 +1,150 @@
+"""enf: end-notched flexure, mode II delamination, coupled (FEM arms, DEM crack path).
+
+Three-point bending over the span 2L (supports at x = 0 and x = 2L under the lower arm),
+the initial crack runs from the left end to a0 (a0 / L = 0.5 is the standard choice and grows
+unstably at the peak under displacement control); the load point (x = L, top face, a flat
+punch one element wide) moves down with a smoothly ramped constant speed. The DEM window
+covers the whole crack path from x = 0, so the faces of the initial crack press on each other
+through the debonded law bonds (compressive penalty, Coulomb friction interface.friction).
+
+Reference: beam theory with the crack-length correction of Wang & Williams (1992),
+a_e = a + 0.42 chi h: G_II = 9 P^2 a_e^2 / (16 b^2 h^3 E11), so the peak (initiation) load is
+P_c = sqrt(16 b^2 h^3 E11 GIIc) / (3 a_e) (VALIDATION.md gives the uncorrected form, reported
+as qoi peak_load_uncorrected_ref); compliance C = (3 a_e^3 + 2 L^3) / (8 E11 b h^3)
++ 3 L / (10 G13 b h) (shear of the span, total depth 2h).
+qoi: peak_load (within 5 %), initial_compliance (within 5 %), dissipated_energy_ratio.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from fem_region.explicit import PrescribedMotion
+
+from ..checks import check
+from ..params import Param, positive
+from . import delamination as dl
+from .coupled_common import COUPLING, coupled_simulation
+
+NAME = "enf"
+DESCRIPTION = "coupled: ENF mode II delamination, peak load vs beam theory"
+MODES = ("coupled",)
+PARAMETERS = {
+    **dl.PARAMETERS,
+    "geometry.length": positive(101.6e-3, "specimen length (the span 2L)", "m"),
+    "geometry.half_span": positive(50.8e-3, "half span L (supports at 0 and 2L)", "m"),
+    "geometry.crack_length": positive(25.4e-3, "initial crack length a0 from the left support", "m"),
+    "load.final_deflection_factor": Param(1.6, "final load-point deflection / closed-form deflection at the "
+                                          "peak load", low=1.1, high=6.0),
+    "load.duration_periods": Param(10.0, "loading time in periods of the beam's first bending mode", low=2.0),
+    "dem.margin": positive(4e-3, "DEM window beyond the load line", "m"),
+    **COUPLING,
+}
+
+
+def closed_form(p: dict) -> dict:
+    E, G, b, h = p["material.E11"], p["material.G13"], p["geometry.width"], p["geometry.arm_thickness"]
+    L, a = p["geometry.half_span"], p["geometry.crack_length"]
+    ae = a + 0.42 * dl.chi(p) * h
+    Pc = np.sqrt(16 * b**2 * h**3 * E * p["interface.GIIc"]) / (3 * ae)
+    C0 = (3 * ae**3 + 2 * L**3) / (8 * E * b * h**3) + 3 * L / (10 * G * b * h)
+    return {"P_peak": Pc, "P_peak_uncorrected": Pc * ae / a, "C0": C0, "delta_peak": Pc * C0}
+
+
+def beam_omega(p: dict) -> float:
+    """First bending frequency (rad/s) of the uncracked simply supported beam, depth 2h."""
+    h, E, rho, L = p["geometry.arm_thickness"], p["material.E11"], p["material.rho"], p["geometry.half_span"]
+    return np.pi**2 * np.sqrt(E * (2 * h) ** 2 / (12 * rho)) / (2 * L) ** 2
+
+
+def build(p: dict, mode: str, dem: str):
+    return bending_specimen(p, dem, closed_form(p), single_leg=False)
+
+
+def bending_specimen(p: dict, dem: str, cf: dict, single_leg: bool):
+    """Three-point bending of the split beam: ENF (both arms on the left support) or single
+    leg bending (only the upper arm on it, so the lower arm's cracked part carries no load)."""
+    from ..params import CaseError
+    L, a0, h = p["geometry.half_span"], p["geometry.crack_length"], p["geometry.arm_thickness"]
+    if 2 * L > p["geometry.length"] + 1e-12 or a0 >= L:
+        raise CaseError(f"geometry.half_span = {L:g}: needs a0 < L and 2L <= geometry.length "
+                        f"(a0 = {a0:g}, length = {p['geometry.length']:g} m)")
+    omega = beam_omega(p)
+    spec = dl.build_specimen(p, a0, 0.0, L + p["dem.margin"], omega)
+    t_load = p["load.duration_periods"] * 2 * np.pi / omega
+    t_ramp = p["load.ramp_time"] or 2 * 2 * np.pi / omega
+    v0 = p["load.final_deflection_factor"] * cf["delta_peak"] / (t_load - 0.5 * t_ramp)
+
+    def speed(t):
+        return -v0 * (0.5 * (1 - np.cos(np.pi * t / t_ramp)) if t < t_ramp else 1.0)
+
+    region = spec.region
+    X = region.X
+    tol = 1e-9 * p["geometry.length"]
+    ex = np.diff(np.unique(X[:, 0])).max()
+    top = np.abs(X[:, 1] - 2 * h) < tol
+    punch = np.flatnonzero(top & (np.abs(X[:, 0] - L) < 0.6 * ex))
+    bottom = np.abs(X[:, 1]) < tol
+    left = np.flatnonzero(bottom & (np.abs(X[:, 0]) < tol))
+    if single_leg:  # the upper arm's lowest node at x = 0
+        arm = np.flatnonzero((np.abs(X[:, 0]) < tol) & (X[:, 1] > h))
+        left = arm[np.argmin(X[arm, 1])][None]
+    right = np.flatnonzero(bottom & (np.abs(X[:, 0] - 2 * L) < 0.6 * ex))[:1]
+    supports = [PrescribedMotion(2 * punch + 1, speed), PrescribedMotion(2 * punch[:1]),
+                PrescribedMotion(np.concatenate([2 * left + 1, 2 * right + 1]))]
+    make = dl.fem_factory(spec, supports, dl.damping_alpha(p, omega))
+    sim, clock = coupled_simulation(p, make, spec.scene, dem, t_load, laws=(spec.bonds,))
+    fem, bonds, wf = clock.fem, spec.bonds, spec.width_factor
+    sim.probes.update({
+        "load": lambda: -wf * fem.reaction(2 * punch + 1),
+        "deflection": lambda: -float(fem.state.u[punch, 1].mean()),
+        "crack_tip": lambda: dl.crack_tip(bonds),
+        "interface_dissipated": lambda: wf * bonds.dissipated_energy(),
+    })
+    sim.counts["law_bonds"] = len(bonds.pairs)
+    return sim
+
+
+def evaluate(p: dict, h: dict, mode: str):
+    cf = closed_form(p)
+    P, delta = np.asarray(h["load"]), np.asarray(h["deflection"])
+    tip, D = np.asarray(h["crack_tip"]), np.asarray(h["interface_dissipated"])
+    k = dl.peak_before_growth(P, tip, p["geometry.crack_length"], 1e-3)
+    qoi = {"peak_load": float(P[k]), "deflection_at_peak": float(delta[k]),
+           "peak_load_uncorrected_ref": float(cf["P_peak_uncorrected"])}
+    early = (P > 0.1 * P[k]) & (P < 0.5 * P[k]) & (np.arange(len(P)) < k)
+    qoi["initial_compliance"] = float(np.polyfit(P[early], delta[early], 1)[0]) if early.sum() > 3 else float("nan")
+    a0 = p["geometry.crack_length"]
+    qoi["crack_growth"] = float(np.nanmax(tip) - a0) if np.isfinite(tip).any() else 0.0
+    grow = (np.arange(len(P)) > k) & np.isfinite(tip) & (tip > a0 + 8 * p["particle.radius"])
+    if grow.sum() > 3 and np.ptp(tip[grow]) > 0:
+        qoi["dissipated_energy_ratio"] = float(np.polyfit(p["geometry.width"] * tip[grow], D[grow], 1)[0]
+                                               / p["interface.GIIc"])
+    else:
+        qoi["dissipated_energy_ratio"] = float("nan")
+    src = "beam theory with the Wang & Williams (1992) crack correction a + 0.42 chi h"
+    return qoi, {
+        "peak_load": check(qoi["peak_load"], cf["P_peak"], 0.05, src + ": P = sqrt(16 b^2 h^3 E11 GIIc) / (3 a_e)"),
+        "initial_compliance": check(qoi["initial_compliance"], cf["C0"], 0.05,
+                                    src + ": (3 a_e^3 + 2 L^3) / (8 E11 b h^3) + 3 L / (10 G13 b h)"),
+    }
+
+
+def plot(p: dict, h: dict, qoi: dict, plots_dir):
+    plot_bending(p, h, closed_form(p), "ENF", plots_dir)
+
+
+def plot_bending(p: dict, h: dict, cf: dict, title: str, plots_dir):
+    import matplotlib.pyplot as plt
+    delta = np.asarray(h["deflection"])
+    fig, ax = plt.subplots(1, 2, figsize=(10, 4))
+    ax[0].plot(1e3 * delta, h["load"], label="coupled (FEM arms + DEM crack path)")
+    d = np.linspace(0, cf["delta_peak"], 20)
+    ax[0].plot(1e3 * d, d / cf["C0"], "k--", label="beam theory (elastic)")
+    ax[0].axhline(cf["P_peak"], color="k", ls=":", label="initiation load, beam theory")
+    ax[0].set(xlabel="load-point deflection (mm)", ylabel="load (N)", title=title)
+    ax[0].legend()
+    ax[1].plot(1e3 * delta, 1e3 * np.asarray(h["crack_tip"]))
+    ax[1].set(xlabel="deflection (mm)", ylabel="crack tip x (mm)")
+    fig.tight_layout()
+    fig.savefig(plots_dir / "load_deflection.png", dpi=120)
+    plt.close(fig)

@@ -1,0 +1,120 @@
+"""Bond laws evaluated by the coupling layer on any engine (the engine only integrates).
+
+An engine that lacks a law (softening, mixed-mode decohesion, friction on the broken faces)
+still carries the particles: each step this module reads the positions of the bonded
+particles (``positions_of``), evaluates the law vectorised over the bonds and adds the bond
+forces (``add_forces``) before the engine's next move. Call ``apply`` from the engine's
+coupling hook, where forces are those of the current positions (back-end contract).
+
+Kinematics (small rotation of the bond axis, the regime of an interface before and during
+decohesion): the separation of bond b is the change of the branch vector,
+delta = (x_j - x_i) - (X_j - X_i), split on the initial unit normal n0 (opening dn > 0)
+and the tangential slip ds. The traction t (Pa) acts on an area A (m^2): F_j = -A t,
+F_i = +A t, so momentum is exact.
+
+Energy is measured, not assumed: the work of the bond forces on the separations is summed
+by the trapezoidal rule; the stored energy is the elastic part of the current traction;
+dissipated = work - stored (decohesion plus friction).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .laws import HashinCohesiveLaw, friction_traction
+
+
+@dataclass
+class LawBonds:
+    """pairs (nb, 2) particle ids; X (n, 3) reference positions m; normal (nb, 3) unit,
+    from i to j; area (nb,) m^2; law: HashinCohesiveLaw; friction: Coulomb coefficient on
+    failed bonds in compression; v_reg: m/s, friction regularisation; scale: factor on the
+    reported energies (slice thickness -> full width); label: family name in outputs."""
+
+    pairs: np.ndarray
+    X: np.ndarray
+    normal: np.ndarray
+    area: np.ndarray
+    law: HashinCohesiveLaw
+    friction: float = 0.0
+    v_reg: float = 1e-3
+    label: str = "interlaminar"
+
+    def __post_init__(self):
+        self.pairs = np.asarray(self.pairs, int).reshape(-1, 2)
+        nb = len(self.pairs)
+        self.normal = np.asarray(self.normal, float).reshape(nb, 3)
+        self.normal = self.normal / np.linalg.norm(self.normal, axis=1)[:, None]
+        self.area = np.broadcast_to(np.asarray(self.area, float), (nb,)).copy()
+        self.ids, inverse = np.unique(self.pairs, return_inverse=True)
+        self._loc = inverse.reshape(-1, 2)  # bond end -> row of self.ids
+        X = np.asarray(self.X, float)
+        self.d0 = X[self.pairs[:, 1]] - X[self.pairs[:, 0]]
+        self.damage = np.zeros(nb)
+        self.delta = np.zeros((nb, 3))  # separation at the last evaluation, m
+        self.traction = np.zeros((nb, 3))  # Pa
+        self.work = 0.0  # J, work of the bond forces on the separations (slice)
+        self.t_failed = np.full(nb, np.nan)  # s, when each bond reached full decohesion
+        self.time = 0.0
+
+    # -- the law -------------------------------------------------------------------------------
+    def split(self, delta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(opening dn (nb,), slip ds (nb, 3)) of separations delta (nb, 3)."""
+        dn = np.einsum("bi,bi->b", delta, self.normal)
+        return dn, delta - dn[:, None] * self.normal
+
+    def evaluate(self, x: np.ndarray, dt: float) -> np.ndarray:
+        """Update the bonds from the positions x (len(ids), 3) m of the bonded particles after
+        a step of dt s; returns the force (nb, 3) N on each bond's second particle."""
+        i, j = self._loc.T
+        delta = x[j] - x[i] - self.d0
+        t, d = self.law.tractions_fast(delta, self.normal, self.damage)
+        failed = d >= 1.0
+        if self.friction > 0 and failed.any() and dt > 0:  # closed crack faces slide with friction
+            dn, ds = self.split(delta)
+            closed = failed & (dn < 0)
+            if closed.any():
+                rate = (ds[closed] - self.split(self.delta[closed])[1]) / dt
+                tn = dn[closed] * self.law.K
+                t[closed] = tn[:, None] * self.normal[closed] + friction_traction(tn, rate, self.friction, self.v_reg)
+        newly = failed & ~(self.damage >= 1.0)
+        self.time += dt
+        self.t_failed[newly] = self.time
+        self.work += 0.5 * float(np.einsum("b,bi,bi->", self.area, self.traction + t, delta - self.delta))
+        self.delta, self.traction, self.damage = delta, t, d
+        return -self.area[:, None] * t
+
+    def apply(self, backend, dt: float) -> None:
+        """Read the bonded particles from the engine, evaluate, add the bond forces."""
+        F = self.evaluate(backend.positions_of(self.ids), dt)
+        f = np.zeros((len(self.ids), 3))
+        np.add.at(f, self._loc[:, 1], F)
+        np.add.at(f, self._loc[:, 0], -F)
+        loaded = np.flatnonzero(np.any(f != 0.0, axis=1))  # open, failed bonds carry nothing
+        backend.add_forces(self.ids[loaded], f[loaded])
+
+    # -- bookkeeping -----------------------------------------------------------------------------
+    def stored_energy(self) -> float:
+        """J, elastic energy of the current tractions: (1 - d) K |delta|^2 / 2 per area, and the
+        compressive penalty K dn^2 / 2 (slice)."""
+        dn, ds = self.split(self.delta)
+        K = self.law.K
+        e = 0.5 * K * ((1 - self.damage) * (np.maximum(dn, 0) ** 2 + np.sum(ds**2, axis=1)) + np.minimum(dn, 0) ** 2)
+        return float(self.area @ e)
+
+    def dissipated_energy(self) -> float:
+        """J, decohesion + friction so far (slice)."""
+        return self.work - self.stored_energy()
+
+    def failed(self) -> np.ndarray:
+        return self.damage >= 1.0
+
+    def checkpoint_state(self) -> dict:
+        return {"damage": self.damage, "delta": self.delta, "traction": self.traction, "work": self.work,
+                "t_failed": self.t_failed, "time": self.time}
+
+    def restore_state(self, d: dict) -> None:
+        for k in ("damage", "delta", "traction", "t_failed"):
+            setattr(self, k, np.array(d[k], float))
+        self.work, self.time = float(d["work"]), float(d["time"])
