@@ -32,14 +32,15 @@ class CoupledClock:
     """One FEM participant, one DEM participant, one tie; m DEM steps per FEM step."""
 
     def __init__(self, fem: ExplicitDynamics, dem: DemBackend, tie, dt_fem: float, substeps: int = 1,
-                 laws: tuple = ()):
+                 models: tuple = ()):
         self.fem, self.dem, self.tie = fem, dem, tie
-        self.laws = list(laws)  # LawBonds the coupling layer evaluates on the engine's particles
+        # coupling-layer models acting on the engine's particles (LawBonds, ParticleImpactor)
+        self.models = list(models)
         self.m, self.dt = int(substeps), dt_fem
         self.dt_dem = dt_fem / self.m
         self.k = 0  # DEM steps whose forces have been handed over
         self.interface_work = 0.0  # J, work of the tie forces on the FEM (internal to the system)
-        self.inner = {"fem": 0.0, "interface": 0.0, "laws": 0.0}
+        self.inner = {"fem": 0.0, "interface": 0.0, "models": 0.0}
         self.snapshot: dict[str, float] = {}
         self.momentum_snapshot = np.zeros(3)
         self.snapshot_every = 1  # FEM steps between snapshots (the history interval) ...
@@ -52,8 +53,8 @@ class CoupledClock:
         clock = time.perf_counter
         fem = self.fem
         t0 = clock()
-        for bonds in self.laws:  # first, so that the interface forces include the bond forces
-            bonds.apply(self.dem, self.dt_dem if self.k else 0.0)
+        for model in self.models:  # first, so that the interface forces include theirs
+            model.apply(self.dem, self.dt_dem if self.k else 0.0)
         t_law = clock()
         f_tie = self.f_tie = self.tie.fast_force(fem.region.X + fem.state.u)
         t1 = clock()
@@ -70,7 +71,7 @@ class CoupledClock:
         self.tie.follow(fem.state.v)
         self.k += 1
         self.inner["interface"] += (t1 - t_law) + (clock() - t2)
-        self.inner["laws"] += t_law - t0
+        self.inner["models"] += t_law - t0
         self.inner["fem"] += t2 - t1
 
     def _snapshot(self, f_tie: np.ndarray) -> None:
@@ -80,16 +81,18 @@ class CoupledClock:
         self.u_snapshot = fem.state.u.copy()  # the FEM drifts ahead of the engine
         P = np.zeros(3)
         P[: fem.region.dim] = fem.m @ fem.state.v
-        self.momentum_snapshot = P + self._m_dem @ self.dem.velocities()
+        self.momentum_snapshot = P + self._m_dem @ self.dem.velocities() + sum((m.momentum() for m in self.models),
+                                                                                np.zeros(3))
         v_n = self.v_snapshot = fem.state.v + 0.5 * self.dt * fem.state.a + 0.5 * self.dt_dem * f_tie / fem.m[:, None]
         f = fem.energies()
         d = self.dem.energies()
         kin_fem = 0.5 * float(np.einsum("n,ni,ni->", fem.m, v_n, v_n))
-        stored = sum(b.stored_energy() for b in self.laws)
-        lost = sum(b.dissipated_energy() for b in self.laws)
-        self.snapshot = {"kinetic": kin_fem + d["kinetic"],
-                         "internal": f["internal"] + d["elastic"] + self.tie.energy() + stored,
-                         "external_work": f["external_work"], "dissipated": f["dissipated"] + d["dissipated"] + lost}
+        e = [m.energies() for m in self.models]
+        total = lambda key: sum(x[key] for x in e)
+        self.snapshot = {"kinetic": kin_fem + d["kinetic"] + total("kinetic"),
+                         "internal": f["internal"] + d["elastic"] + self.tie.energy() + total("internal"),
+                         "external_work": f["external_work"],
+                         "dissipated": f["dissipated"] + d["dissipated"] + total("dissipated")}
         self.interface_work_snapshot = self.interface_work
 
     # -- checkpoint ---------------------------------------------------------------------------
@@ -101,7 +104,7 @@ class CoupledClock:
              **{k: getattr(self, k) for k in self._SCALARS + self._ARRAYS if hasattr(self, k)}}
         if hasattr(self.tie, "_stretch"):
             d["tie_stretch"] = self.tie._stretch
-        d["laws"] = [b.checkpoint_state() for b in self.laws]
+        d["models"] = [m.checkpoint_state() for m in self.models]
         return d
 
     def restore_state(self, d: dict, engine_checkpoint) -> None:
@@ -115,8 +118,8 @@ class CoupledClock:
                 setattr(self, k, np.array(d[k]))
         if "tie_stretch" in d:
             self.tie._stretch = np.array(d["tie_stretch"])
-        for b, state in zip(self.laws, d.get("laws", [])):
-            b.restore_state(state)
+        for m, state in zip(self.models, d.get("models", [])):
+            m.restore_state(state)
         self.dem.restore(engine_checkpoint)
 
     def step(self) -> None:

@@ -15,7 +15,8 @@ from typing import Callable
 
 import numpy as np
 
-TIMERS = ("fem", "dem", "interface", "laws", "io", "orchestrator")  # laws: bond laws the coupling layer evaluates
+# models: bond laws and impactors the coupling layer evaluates on the engine's particles
+TIMERS = ("fem", "dem", "interface", "models", "io", "orchestrator")
 
 
 class Instability(RuntimeError):

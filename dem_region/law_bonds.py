@@ -25,10 +25,15 @@ import numpy as np
 from .laws import HashinCohesiveLaw, friction_traction
 
 
+_LAW_STATE = ("m0", "mf", "crushed", "snapback")  # what a stateful law carries between steps
+
+
 @dataclass
 class LawBonds:
     """pairs (nb, 2) particle ids; X (n, 3) reference positions m; normal (nb, 3) unit,
-    from i to j; area (nb,) m^2; law: HashinCohesiveLaw; friction: Coulomb coefficient on
+    from i to j; area (nb,) m^2; law: HashinCohesiveLaw or PlyBondLaw; volume: (n,) m^3, the
+    lattice cell of each particle, needed by laws that initiate on the particle stress
+    (PlyBondLaw: Love-Weber stress of the law bonds' forces); friction: Coulomb coefficient on
     failed bonds in compression; v_reg: m/s, friction regularisation; scale: factor on the
     reported energies (slice thickness -> full width); label: family name in outputs."""
 
@@ -36,8 +41,9 @@ class LawBonds:
     X: np.ndarray
     normal: np.ndarray
     area: np.ndarray
-    law: HashinCohesiveLaw
+    law: object
     friction: float = 0.0
+    volume: np.ndarray | None = None
     v_reg: float = 1e-3
     label: str = "interlaminar"
 
@@ -57,6 +63,10 @@ class LawBonds:
         self.work = 0.0  # J, work of the bond forces on the separations (slice)
         self.t_failed = np.full(nb, np.nan)  # s, when each bond reached full decohesion
         self.time = 0.0
+        if hasattr(self.law, "initiate"):
+            if self.volume is None:
+                raise ValueError("this law initiates on the particle stress: give the particles' volume")
+            self._cell = np.asarray(self.volume, float)[self.ids]
 
     # -- the law -------------------------------------------------------------------------------
     def split(self, delta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -69,6 +79,8 @@ class LawBonds:
         a step of dt s; returns the force (nb, 3) N on each bond's second particle."""
         i, j = self._loc.T
         delta = x[j] - x[i] - self.d0
+        if hasattr(self.law, "initiate"):
+            self.law.initiate(self.bond_stress(), np.einsum("bi,bi->b", delta, self.normal))
         t, d = self.law.tractions_fast(delta, self.normal, self.damage)
         failed = d >= 1.0
         if self.friction > 0 and failed.any() and dt > 0:  # closed crack faces slide with friction
@@ -76,14 +88,15 @@ class LawBonds:
             closed = failed & (dn < 0)
             if closed.any():
                 rate = (ds[closed] - self.split(self.delta[closed])[1]) / dt
-                tn = dn[closed] * self.law.K
+                tn = dn[closed] * np.broadcast_to(self.law.K, dn.shape)[closed]
                 t[closed] = tn[:, None] * self.normal[closed] + friction_traction(tn, rate, self.friction, self.v_reg)
         newly = failed & ~(self.damage >= 1.0)
         self.time += dt
         self.t_failed[newly] = self.time
         self.work += 0.5 * float(np.einsum("b,bi,bi->", self.area, self.traction + t, delta - self.delta))
         self.delta, self.traction, self.damage = delta, t, d
-        return -self.area[:, None] * t
+        self.force = -self.area[:, None] * t
+        return self.force
 
     def apply(self, backend, dt: float) -> None:
         """Read the bonded particles from the engine, evaluate, add the bond forces."""
@@ -94,27 +107,59 @@ class LawBonds:
         loaded = np.flatnonzero(np.any(f != 0.0, axis=1))  # open, failed bonds carry nothing
         backend.add_forces(self.ids[loaded], f[loaded])
 
+    def bond_stress(self) -> np.ndarray:
+        """(nb, 6) Voigt Pa: mean of the two end particles' Love-Weber stresses,
+        sigma_p = (1 / V_p) sum_b (A_b t_b) (x) l_b / 2 over the law bonds of particle p
+        (tension positive; tractions of the last evaluation, reference branch vectors l_b)."""
+        f = self.area[:, None] * self.traction  # N, pulling the ends together in tension
+        dyad = 0.5 * np.einsum("bi,bj->bij", f, self.d0)
+        s = np.zeros((len(self.ids), 3, 3))
+        np.add.at(s, self._loc[:, 0], dyad)
+        np.add.at(s, self._loc[:, 1], dyad)
+        s /= self._cell[:, None, None]
+        sb = 0.5 * (s[self._loc[:, 0]] + s[self._loc[:, 1]])
+        sb = 0.5 * (sb + np.swapaxes(sb, 1, 2))
+        return np.stack([sb[:, 0, 0], sb[:, 1, 1], sb[:, 2, 2], sb[:, 1, 2], sb[:, 0, 2], sb[:, 0, 1]], axis=1)
+
     # -- bookkeeping -----------------------------------------------------------------------------
     def stored_energy(self) -> float:
         """J, elastic energy of the current tractions: (1 - d) K |delta|^2 / 2 per area, and the
         compressive penalty K dn^2 / 2 (slice)."""
         dn, ds = self.split(self.delta)
-        K = self.law.K
-        e = 0.5 * K * ((1 - self.damage) * (np.maximum(dn, 0) ** 2 + np.sum(ds**2, axis=1)) + np.minimum(dn, 0) ** 2)
-        return float(self.area @ e)
+        return float(self.area @ self.law.stored_density(dn, ds, self.damage))
 
     def dissipated_energy(self) -> float:
         """J, decohesion + friction so far (slice)."""
         return self.work - self.stored_energy()
 
+    def force_on(self, particles: np.ndarray) -> np.ndarray:
+        """(3,) N, total bond force on the set ``particles`` at the last evaluation."""
+        mask = np.isin(self.pairs, particles)
+        F = getattr(self, "force", np.zeros((len(self.pairs), 3)))
+        return F[mask[:, 1]].sum(axis=0) - F[mask[:, 0]].sum(axis=0)
+
+    def energies(self) -> dict[str, float]:
+        return {"kinetic": 0.0, "internal": self.stored_energy(), "dissipated": self.dissipated_energy()}
+
+    def momentum(self) -> np.ndarray:
+        return np.zeros(3)  # equal and opposite forces on particles the engine carries
+
     def failed(self) -> np.ndarray:
         return self.damage >= 1.0
 
     def checkpoint_state(self) -> dict:
-        return {"damage": self.damage, "delta": self.delta, "traction": self.traction, "work": self.work,
-                "t_failed": self.t_failed, "time": self.time}
+        d = {"damage": self.damage, "delta": self.delta, "traction": self.traction, "work": self.work,
+             "t_failed": self.t_failed, "time": self.time}
+        for k in _LAW_STATE:
+            if hasattr(self.law, k):
+                d["law_" + k] = getattr(self.law, k)
+        return d
 
     def restore_state(self, d: dict) -> None:
         for k in ("damage", "delta", "traction", "t_failed"):
             setattr(self, k, np.array(d[k], float))
         self.work, self.time = float(d["work"]), float(d["time"])
+        for k in _LAW_STATE:
+            if "law_" + k in d:
+                v = np.array(d["law_" + k])
+                setattr(self.law, k, v.astype(type(getattr(self.law, k)[0])) if v.ndim else int(v))

@@ -87,6 +87,10 @@ class HashinCohesiveLaw:
     def failed(self, damage: np.ndarray) -> np.ndarray:
         return np.asarray(damage) >= 1.0
 
+    def stored_density(self, dn: np.ndarray, ds: np.ndarray, damage: np.ndarray) -> np.ndarray:
+        """(n,) J/m^2 elastic energy of the tractions at opening dn (n,), slip ds (n, k)."""
+        return 0.5 * self.K * ((1 - damage) * (np.maximum(dn, 0) ** 2 + np.sum(ds**2, axis=1)) + np.minimum(dn, 0) ** 2)
+
     def tractions_fast(self, delta: np.ndarray, normal: np.ndarray, damage: np.ndarray):
         """The same law as ``tractions`` in one compiled pass (a per-step loop over bonds):
         delta (n, 3) separations m, normal (n, 3) unit; returns (t (n, 3) Pa, new damage (n,))."""
@@ -135,3 +139,67 @@ def friction_traction(tn: np.ndarray, slip_rate: np.ndarray, mu: float, v_reg: f
     rate = np.asarray(slip_rate, float)
     speed = np.sqrt(np.sum(rate**2, axis=1) + v_reg**2)
     return -(mu * p / speed)[:, None] * rate
+
+
+@dataclass
+class PlyBondLaw:
+    """Intralaminar bond of a ply lattice: the orthotropic Hoffman criterion for initiation,
+    linear softening regularised by the fracture energy, full stiffness in compression.
+
+    K: (nb,) Pa/m, central stiffness per bond area (bond force A K dn along the bond, no shear
+    spring: the lattice's diagonals carry shear); Gf: (nb, 2) J/m^2, energy a bond dissipates
+    per unit of its area from initiation to full separation when the crack it joins runs normal
+    to global x (column 0) or y (column 1), chosen at initiation by the larger normal stress
+    (so a crack dissipates the same energy per area whatever the particle size: the
+    regularisation of Bazant & Oh's crack band, with the band one bond long); strengths: the nine Hoffman strengths; axes: (nb, 3, 3) ply axes
+    (columns) of each bond in global coordinates.
+
+    Initiation is decided on the bond's stress (set by ``initiate`` from the lattice's particle
+    stresses): a bond in tension whose Hoffman index reaches 1 starts softening from its
+    current opening m0 to mf = 2 Gf / (K m0) (brittle, mf = m0, if the bond's elastic energy at
+    initiation already exceeds Gf: counted in ``snapback``). A bond in compression whose index
+    reaches 1 is counted in ``crushed`` and keeps its stiffness (crushing is not softened).
+    """
+
+    K: np.ndarray
+    Gf: np.ndarray
+    strengths: object
+    axes: np.ndarray
+
+    def __post_init__(self):
+        self.K = np.asarray(self.K, float)
+        nb = self.K.size
+        self.Gf = np.broadcast_to(np.asarray(self.Gf, float).reshape(-1, 2), (nb, 2)).copy()
+        self.strength_scale = np.ones(nb)  # < 1: a weaker bond (an imperfection)
+        self.axes = np.broadcast_to(np.asarray(self.axes, float), (nb, 3, 3)).copy()
+        self.m0 = np.zeros(nb)  # onset opening (m), 0 until initiated
+        self.mf = np.zeros(nb)
+        self.index = np.zeros(nb)  # Hoffman index at the last initiation check
+        self.crushed = np.zeros(nb, bool)
+        self.snapback = 0
+
+    def initiate(self, stress: np.ndarray, dn: np.ndarray) -> None:
+        """stress: (nb, 6) Voigt global Pa at each bond; dn: (nb,) current openings m."""
+        from fem_region.failure import hoffman, to_ply_axes
+        self.index = hoffman(to_ply_axes(stress / self.strength_scale[:, None], self.axes), self.strengths)
+        over = (self.index >= 1.0) & (self.m0 == 0.0)
+        new = over & (dn > 0)
+        self.crushed |= over & (dn <= 0)
+        if new.any():
+            m0 = dn[new]
+            Gf = np.where(np.abs(stress[new, 0]) >= np.abs(stress[new, 1]), self.Gf[new, 0], self.Gf[new, 1])
+            mf = 2 * Gf / (self.K[new] * m0)
+            self.snapback += int(np.sum(mf <= m0))
+            self.m0[new], self.mf[new] = m0, np.maximum(mf, m0 * (1 + 1e-12))
+
+    def tractions_fast(self, delta: np.ndarray, normal: np.ndarray, damage: np.ndarray):
+        dn = np.einsum("bi,bi->b", delta, normal)
+        on = (self.m0 > 0) & (dn > self.m0)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            d_now = np.where(on, self.mf * (dn - self.m0) / (dn * (self.mf - self.m0)), 0.0)
+        d = np.clip(np.maximum(damage, d_now), 0.0, 1.0)
+        tn = np.where(dn > 0, (1 - d) * self.K * dn, self.K * dn)
+        return tn[:, None] * normal, d
+
+    def stored_density(self, dn: np.ndarray, ds: np.ndarray, damage: np.ndarray) -> np.ndarray:
+        return 0.5 * self.K * ((1 - damage) * np.maximum(dn, 0) ** 2 + np.minimum(dn, 0) ** 2)

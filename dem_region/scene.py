@@ -154,8 +154,14 @@ class DemScene:
         if not len(self.bonds):  # granular: the Rayleigh wave step of the smallest particle
             G = self.young / (2 * (1 + self.poisson))
             return float(np.min(np.pi * self.radius * np.sqrt(self.density / G) / (0.1631 * self.poisson + 0.8766)))
-        i, j = self.bonds.T
-        k = np.maximum(self.kn, self.ks)
-        cross = k / np.sqrt(m[i] * m[j])
-        row = np.bincount(i, k / m[i] + cross, self.n) + np.bincount(j, k / m[j] + cross, self.n)
-        return 2.0 / np.sqrt(row.max()) if row.max() > 0 else np.inf
+        return gershgorin_dt(m, self.bonds, np.maximum(self.kn, self.ks))
+
+
+def gershgorin_dt(m: np.ndarray, pairs: np.ndarray, k: np.ndarray) -> float:
+    """Central-difference stable step (s) of springs k (nb,) N/m on pairs (nb, 2) between
+    masses m (n,) kg: omega_max^2 <= max_i sum_j k_ij (1/m_i + 1/sqrt(m_i m_j))."""
+    n = len(m)
+    i, j = np.asarray(pairs, int).reshape(-1, 2).T
+    cross = k / np.sqrt(m[i] * m[j])
+    row = np.bincount(i, k / m[i] + cross, n) + np.bincount(j, k / m[j] + cross, n)
+    return 2.0 / np.sqrt(row.max()) if row.size and row.max() > 0 else np.inf

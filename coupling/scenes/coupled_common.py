@@ -28,7 +28,7 @@ COUPLING: dict[str, Param] = {
 
 
 def coupled_simulation(p: dict, make_fem: Callable[[np.ndarray | None], ExplicitDynamics], scene: DemScene,
-                       dem: str, t_end_default: float, history_every: int = 0, steps: int = 0, laws: tuple = ()):
+                       dem: str, t_end_default: float, history_every: int = 0, steps: int = 0, models: tuple = ()):
     """(Simulation, CoupledClock) for a FEM far field made by ``make_fem(None)`` and a
     DEM ``scene`` whose group "interface" is slaved to the FEM. steps: FEM steps (default
     from t_end); history_every: FEM steps between samples (default from output.history_every)."""
@@ -45,7 +45,7 @@ def coupled_simulation(p: dict, make_fem: Callable[[np.ndarray | None], Explicit
     except EngineUnavailable as exc:
         raise CaseError(str(exc)) from None
     try:
-        return _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, steps, laws)
+        return _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, steps, models)
     except NotImplementedError as exc:
         backend.finalize()
         raise CaseError(f"--dem {dem}: {exc}") from None
@@ -54,7 +54,7 @@ def coupled_simulation(p: dict, make_fem: Callable[[np.ndarray | None], Explicit
         raise
 
 
-def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, steps, laws):
+def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, steps, models):
     backend.build(scene)
     if p["interface.tie"] == "kinematic":
         tie = KinematicTie(itf, backend, scene.mass)
@@ -63,7 +63,7 @@ def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, st
             raise NotImplementedError("the penalty tie needs added particle forces, not available on this engine yet")
         tie = PenaltyTie(itf, backend, scene.mass, p["interface.penalty"] or 4 * float(scene.kn.max()))
     dt_fem, dt_dem = fem.critical_dt(), min(backend.critical_dt(), tie.critical_dt(fem.m),
-                                            *(law_critical_dt(b, scene) for b in laws))
+                                            models_critical_dt(models, scene))
     # 0 = automatic: as many substeps as the FEM step allows with the kinematic tie; one with
     # the penalty tie, whose stiff spring mode makes impulse time stepping resonate when the
     # FEM step is near a multiple of its period (measured: unstable at m = 4, k = 2e8 N/m)
@@ -75,9 +75,9 @@ def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, st
     if dt / m > dt_dem:
         raise CaseError(f"clock.dt = {p['clock.dt']:g}: the DEM substep dt/{m} is above the DEM stable step "
                         f"{dt_dem:.4g} s; allowed <= {m * dt_dem:.4g} s")
-    if laws and not hasattr(backend, "add_forces"):
-        raise NotImplementedError("bond laws evaluated by the coupling layer need added particle forces")
-    clock = CoupledClock(fem, backend, tie, dt, m, laws=laws)
+    if models and not hasattr(backend, "add_forces"):
+        raise NotImplementedError("bond laws and impactors evaluated by the coupling layer need added particle forces")
+    clock = CoupledClock(fem, backend, tie, dt, m, models=models)
     every = history_every or p["output.history_every"] or max(1, n // 1000)
     clock.snapshot_every, clock.last_window = every, n
     region = fem.region
@@ -108,11 +108,18 @@ def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, st
     return sim, clock
 
 
-def law_critical_dt(bonds, scene: DemScene) -> float:
-    """Stable step (s) of the law bonds' penalty alone (Gershgorin: k (1/m_i + 1/m_j))."""
-    k = bonds.law.K * bonds.area
-    m = scene.mass[bonds.pairs]
-    return float(2.0 / np.sqrt(np.max(k * (1 / m[:, 0] + 1 / m[:, 1])))) if len(k) else np.inf
+def models_critical_dt(models, scene: DemScene) -> float:
+    """Stable step (s) of the engine's bonds and the coupling layer's law bonds together
+    (their springs add on the same particles; Gershgorin's bound, compressive stiffness),
+    and of impactor penalties."""
+    from dem_region.scene import gershgorin_dt
+    if not models:
+        return np.inf
+    laws = [b for b in models if hasattr(b, "pairs")]
+    others = [m.critical_dt(scene.mass) for m in models if not hasattr(m, "pairs")]
+    pairs = [scene.bonds] + [b.pairs for b in laws]
+    k = [np.maximum(scene.kn, scene.ks)] + [np.broadcast_to(b.law.K, (len(b.pairs),)) * b.area for b in laws]
+    return min(gershgorin_dt(scene.mass, np.vstack(pairs), np.concatenate(k)), *others, np.inf)
 
 
 def _hint(p: dict, tie, m: int, dt: float, dt_dem_stable: float) -> str:

@@ -74,7 +74,7 @@ def build(p: dict, mode: str, dem: str):
     up, down = 2 * spec.upper_end + 1, 2 * spec.lower_end + 1
     supports = [PrescribedMotion(up, speed), PrescribedMotion(down, lambda t: -speed(t)), PrescribedMotion(2 * pin)]
     make = dl.fem_factory(spec, supports, dl.damping_alpha(p, omega))
-    sim, clock = coupled_simulation(p, make, spec.scene, dem, t_load, laws=(spec.bonds,))
+    sim, clock = coupled_simulation(p, make, spec.scene, dem, t_load, models=(spec.bonds,))
     fem, bonds, wf = clock.fem, spec.bonds, spec.width_factor
     sim.probes.update({
         "load": lambda: wf * fem.reaction(up),
@@ -92,7 +92,8 @@ def evaluate(p: dict, h: dict, mode: str):
     tip, D = np.asarray(h["crack_tip"]), np.asarray(h["interface_dissipated"])
     a0, b = p["geometry.crack_length"], p["geometry.width"]
     k = dl.peak_before_growth(P, tip, a0, 1e-3)
-    qoi = {"peak_load": float(P[k]), "opening_at_peak": float(delta[k])}
+    Z0, R0 = dl.resolved_strengths(p, 2 * p["particle.radius"])
+    qoi = {"Z0_used": Z0, "R0_used": R0, "peak_load": float(P[k]), "opening_at_peak": float(delta[k])}
     # elastic slope from the first part of the loading (up to 40 % of the peak)
     early = (P > 0.1 * P[k]) & (P < 0.4 * P[k]) & (np.arange(len(P)) < k)
     qoi["initial_compliance"] = float(np.polyfit(P[early], delta[early], 1)[0]) if early.sum() > 3 else float("nan")

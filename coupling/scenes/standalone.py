@@ -18,37 +18,55 @@ from .common import n_steps, time_step
 
 
 class PrescribedParticles:
-    """Particles ``ids`` driven with velocity(t) -> (3,) m/s; tracks the work the drive does."""
+    """Particles ``ids`` driven with velocity(t) -> (3,) or (len(ids), 3) m/s; tracks the work
+    the drive does."""
 
-    def __init__(self, backend, ids: np.ndarray, velocity: Callable[[float], np.ndarray], dt: float):
+    def __init__(self, backend, ids: np.ndarray, velocity: Callable[[float], np.ndarray], dt: float,
+                 dofs: str = "xyz"):
         self.backend, self.ids, self.velocity, self.dt = backend, np.asarray(ids, int), velocity, dt
         self.k = 0
         self.work = 0.0  # J, by the drive: minus the chain's force on the driven particles
-        backend.prescribe(self.ids)
+        self.dofs = [("xyz".index(c)) for c in dofs]
+        backend.prescribe(self.ids) if dofs == "xyz" else backend.prescribe(self.ids, dofs)
 
     def between(self) -> None:
         F = self.backend.forces(self.ids)
-        v = np.tile(np.asarray(self.velocity((self.k + 0.5) * self.dt), float), (len(self.ids), 1))
-        self.work += float(np.sum(-F * v)) * self.dt  # midpoint rule over the next move
+        v = np.asarray(self.velocity((self.k + 0.5) * self.dt), float)
+        v = np.tile(v, (len(self.ids), 1)) if v.ndim == 1 else v  # one velocity for all, or one each
+        self.work += float(np.sum(-F[:, self.dofs] * v[:, self.dofs])) * self.dt  # midpoint rule, driven DOFs
         self.backend.set_velocities(self.ids, v)
         self.k += 1
 
 
 def dem_only(p: dict, scene: DemScene, dem: str, t_end_default: float,
              drive: tuple[np.ndarray, Callable[[float], np.ndarray]] | None = None, history_every: int = 0,
-             dt: float = 0.0):
+             dt: float = 0.0, models: tuple = (), drive_dofs: str = "xyz"):
     """(Simulation, backend, PrescribedParticles or None) for ``scene`` alone, driven on
-    drive[0] with velocity drive[1](t) if given; dt: the step if the scene sets it (s)."""
+    drive[0] with velocity drive[1](t) if given; dt: the step if the scene sets it (s);
+    models: coupling-layer models on the engine's particles (LawBonds, ParticleImpactor);
+    drive_dofs: the translations the drive prescribes (the others stay free)."""
     try:
         backend = make_backend(dem, p["dem.process"])
     except EngineUnavailable as exc:
         raise CaseError(str(exc)) from None
     try:
         backend.build(scene)
-        dt_stable = backend.critical_dt()
+        if models and not hasattr(backend, "add_forces"):
+            raise NotImplementedError("bond laws and impactors evaluated by the coupling layer need added particle forces")
+        from .coupled_common import models_critical_dt
+        dt_stable = min(backend.critical_dt(), models_critical_dt(models, scene))
         n, dt = n_steps(p, t_end_default, min(dt, dt_stable) if dt else time_step(p, dt_stable))
-        driver = PrescribedParticles(backend, drive[0], drive[1], dt) if drive else None
+        driver = PrescribedParticles(backend, drive[0], drive[1], dt, drive_dofs) if drive else None
         hook = driver.between if driver else None
+        if models:
+            steps = [0]
+
+            def hook(drive_between=hook):
+                for model in models:  # their forces first: the drive reads the forces they add
+                    model.apply(backend, dt if steps[0] else 0.0)
+                steps[0] += 1
+                if drive_between:
+                    drive_between()
         backend.set_dt(dt)
         backend.start(hook)
     except NotImplementedError as exc:
@@ -61,9 +79,11 @@ def dem_only(p: dict, scene: DemScene, dem: str, t_end_default: float,
         d = backend.energies()
         work = 0.0
         if driver:  # the drive's work up to the move that follows the last force evaluation
-            work = driver.work - float(np.sum(-backend.forces(driver.ids) * backend.velocities()[driver.ids])) * dt
-        return {"kinetic": d["kinetic"], "internal": d["elastic"], "external_work": work,
-                "dissipated": d["dissipated"]}
+            F, v = backend.forces(driver.ids)[:, driver.dofs], backend.velocities()[driver.ids][:, driver.dofs]
+            work = driver.work - float(np.sum(-F * v)) * dt
+        e = [m.energies() for m in models]
+        return {"kinetic": d["kinetic"] + sum(x["kinetic"] for x in e), "internal": d["elastic"] + sum(x["internal"] for x in e),
+                "external_work": work, "dissipated": d["dissipated"] + sum(x["dissipated"] for x in e)}
 
     pts0 = scene.x
 
