@@ -74,6 +74,9 @@ class Simulation:
     checkpoint: Callable[[], tuple[dict, Callable | None]] | None = None
     restore: Callable[[dict, object], None] | None = None
     versions: dict[str, str] = field(default_factory=dict)
+    # name -> (time s, capture() -> {field: array}): arrays taken at the first sample at or
+    # after that time (damage pictures), returned in the history as "<name>.<field>"
+    snapshots: dict[str, tuple[float, Callable[[], dict[str, np.ndarray]]]] = field(default_factory=dict)
 
 
 def energy_scale(e: dict[str, float]) -> float:
@@ -103,6 +106,7 @@ def run_clock(sim: Simulation, on_sample: Callable[[int, float], None] | None = 
     timing = dict.fromkeys(TIMERS, 0.0)
     names = ["time", *sim.probes, "kinetic", "internal", "external_work", "dissipated", "balance_error_rel"]
     hist: dict[str, list[float]] = {k: [] for k in names}
+    taken: dict[str, np.ndarray] = {}
     e0 = sim.energies()
     first = 1
     if resume_from is not None:
@@ -112,6 +116,7 @@ def run_clock(sim: Simulation, on_sample: Callable[[int, float], None] | None = 
         loop = saved["loop"]
         hist = {k: list(np.asarray(loop["history"][k]).tolist()) for k in names}
         e0 = {k: float(v) for k, v in loop["e0"].items()}
+        taken = {k: np.asarray(v) for k, v in loop.get("snapshots", {}).items()}
         first = int(loop["step"]) + 1
     frame_every = max(1, sim.n_steps // sim.field_frames) if sim.fields and sim.field_frames else 0
     clock = time.perf_counter
@@ -126,6 +131,9 @@ def run_clock(sim: Simulation, on_sample: Callable[[int, float], None] | None = 
                   "balance_error_rel": energy_balance_error(e, e0, scale[0])}
         for k in names:
             hist[k].append(values[k])
+        for name, (t_snap, capture) in sim.snapshots.items():
+            if values["time"] >= t_snap * (1 - 1e-9) and not any(k.startswith(name + ".") for k in taken):
+                taken.update({f"{name}.{k}": np.asarray(v) for k, v in capture().items()})
         timing["orchestrator"] += clock() - t0
         bad = [k for k, v in values.items() if not math.isfinite(v)]
         if bad:
@@ -152,7 +160,8 @@ def run_clock(sim: Simulation, on_sample: Callable[[int, float], None] | None = 
     def save(step: int) -> None:
         t0 = clock()
         state, engine_save = sim.checkpoint()
-        loop = {"step": step, "e0": e0, "scale": scale[0], "history": {k: np.asarray(v) for k, v in hist.items()}}
+        loop = {"step": step, "e0": e0, "scale": scale[0], "history": {k: np.asarray(v) for k, v in hist.items()},
+                "snapshots": dict(taken)}
         ck.write(run_dir, {"simulation": state, "loop": loop}, engine_save)
         timing["io"] += clock() - t0
 
@@ -175,9 +184,9 @@ def run_clock(sim: Simulation, on_sample: Callable[[int, float], None] | None = 
             if can_save and step % checkpoint_every == 0 and step < sim.n_steps:
                 save(step)
     except Instability as exc:
-        exc.partial = _result(hist, _corrected(timing, sim), sim.energies(), step)  # type: ignore[attr-defined]
+        exc.partial = _result(hist, _corrected(timing, sim), sim.energies(), step, taken)  # type: ignore[attr-defined]
         raise
-    return _result(hist, _corrected(timing, sim), sim.energies(), sim.n_steps)
+    return _result(hist, _corrected(timing, sim), sim.energies(), sim.n_steps, taken)
 
 
 def _corrected(timing: dict, sim: Simulation) -> dict:
@@ -187,8 +196,9 @@ def _corrected(timing: dict, sim: Simulation) -> dict:
     return timing
 
 
-def _result(hist, timing, energy, steps) -> dict:
+def _result(hist, timing, energy, steps, snapshots=None) -> dict:
     history = {k: np.asarray(v) for k, v in hist.items()}
+    history.update(snapshots or {})
     err = history["balance_error_rel"]
     energy = dict(energy, balance_error_rel=float(err[-1]) if err.size else 0.0)
     return {"history": history, "timing_s": timing, "energy": energy, "steps": steps}

@@ -22,7 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .laws import HashinCohesiveLaw, friction_traction
+from . import kernels
+from .laws import friction_traction
 
 
 _LAW_STATE = ("m0", "mf", "crushed", "snapback")  # what a stateful law carries between steps
@@ -101,9 +102,7 @@ class LawBonds:
     def apply(self, backend, dt: float) -> None:
         """Read the bonded particles from the engine, evaluate, add the bond forces."""
         F = self.evaluate(backend.positions_of(self.ids), dt)
-        f = np.zeros((len(self.ids), 3))
-        np.add.at(f, self._loc[:, 1], F)
-        np.add.at(f, self._loc[:, 0], -F)
+        f = kernels.scatter_pairs(self._loc, F, len(self.ids))
         loaded = np.flatnonzero(np.any(f != 0.0, axis=1))  # open, failed bonds carry nothing
         backend.add_forces(self.ids[loaded], f[loaded])
 
@@ -111,15 +110,7 @@ class LawBonds:
         """(nb, 6) Voigt Pa: mean of the two end particles' Love-Weber stresses,
         sigma_p = (1 / V_p) sum_b (A_b t_b) (x) l_b / 2 over the law bonds of particle p
         (tension positive; tractions of the last evaluation, reference branch vectors l_b)."""
-        f = self.area[:, None] * self.traction  # N, pulling the ends together in tension
-        dyad = 0.5 * np.einsum("bi,bj->bij", f, self.d0)
-        s = np.zeros((len(self.ids), 3, 3))
-        np.add.at(s, self._loc[:, 0], dyad)
-        np.add.at(s, self._loc[:, 1], dyad)
-        s /= self._cell[:, None, None]
-        sb = 0.5 * (s[self._loc[:, 0]] + s[self._loc[:, 1]])
-        sb = 0.5 * (sb + np.swapaxes(sb, 1, 2))
-        return np.stack([sb[:, 0, 0], sb[:, 1, 1], sb[:, 2, 2], sb[:, 1, 2], sb[:, 0, 2], sb[:, 0, 1]], axis=1)
+        return kernels.bond_stress(self._loc, self.area[:, None] * self.traction, self.d0, self._cell, len(self.ids))
 
     # -- bookkeeping -----------------------------------------------------------------------------
     def stored_energy(self) -> float:

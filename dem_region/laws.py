@@ -180,8 +180,10 @@ class PlyBondLaw:
 
     def initiate(self, stress: np.ndarray, dn: np.ndarray) -> None:
         """stress: (nb, 6) Voigt global Pa at each bond; dn: (nb,) current openings m."""
-        from fem_region.failure import hoffman, to_ply_axes
-        self.index = hoffman(to_ply_axes(stress / self.strength_scale[:, None], self.axes), self.strengths)
+        from .kernels import hoffman_ply
+        k = self.strengths
+        self.index = hoffman_ply(stress, self.axes, self.strength_scale,
+                                 (k.Xt, k.Xc, k.Yt, k.Yc, k.Zt, k.Zc, k.S23, k.S13, k.S12))
         over = (self.index >= 1.0) & (self.m0 == 0.0)
         new = over & (dn > 0)
         self.crushed |= over & (dn <= 0)

@@ -39,9 +39,14 @@ class PlyMaterial:
     strengths: HoffmanStrengths
     Gf_fibre: float
     Gf_matrix: float
+    moduli: dict | None = None  # angle -> (E_x, E_y, G) of the slice, e.g. from a plane-strain D
 
     def in_plane(self, angle: float) -> tuple[float, float, float]:
-        """(E_x, E_y, G) of the slice for ply angle 0 (fibres along x) or 90 (out of plane)."""
+        """(E_x, E_y, G) of the slice for ply angle 0 (fibres along x) or 90 (out of plane);
+        the uniaxial in-plane moduli of the FEM's reduced matrix if given (same slice on
+        both sides of the interface), else the plane-stress engineering constants."""
+        if self.moduli is not None:
+            return self.moduli[angle]
         return (self.E11, self.E22, self.G12) if angle == 0 else (self.E22, self.E22, self.G23)
 
     def axes(self, angle: float) -> np.ndarray:
@@ -49,6 +54,13 @@ class PlyMaterial:
         if angle == 0:  # 1 = x, 2 = z (in-ply transverse, across the width), 3 = y (ply normal)
             return np.array([[1.0, 0, 0], [0, 0, 1.0], [0, 1.0, 0]])
         return np.array([[0, 1.0, 0], [0, 0, 1.0], [1.0, 0, 0]])  # 1 = z, 2 = x, 3 = y
+
+
+def slice_moduli(D: np.ndarray) -> tuple[float, float, float]:
+    """(E_x, E_y, G) Pa, the uniaxial moduli and shear modulus of a 2D stiffness (3, 3)
+    [xx, yy, xy] (plane strain or stress): 1 / compliance diagonal, and D_66."""
+    S = np.linalg.inv(D)
+    return 1.0 / S[0, 0], 1.0 / S[1, 1], float(D[2, 2])
 
 
 def lattice_stiffness(E_x: float, E_y: float, G: float, t: float) -> tuple[float, float, float]:

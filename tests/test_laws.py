@@ -129,3 +129,33 @@ def test_law_bonds_measure_toughness_and_conserve_momentum(angle):
         np.testing.assert_allclose(eng.f.sum(axis=0), 0.0, atol=1e-12 * max(1.0, np.abs(eng.f).max()))
     assert bonds.failed().all()
     assert bonds.dissipated_energy() == pytest.approx(area * float(AS4.toughness(B)[0]), rel=2e-3)
+
+
+def test_compiled_bond_kernels_match_numpy():
+    """Scatter, Love-Weber bond stress and the Hoffman index: compiled loops = numpy forms."""
+    from dem_region import kernels
+    from fem_region.failure import HoffmanStrengths, hoffman, to_ply_axes
+    rng = np.random.default_rng(3)
+    n, nb = 12, 40
+    loc = np.array([rng.choice(n, 2, replace=False) for _ in range(nb)])
+    F, d0 = rng.normal(size=(nb, 3)), rng.normal(size=(nb, 3))
+    cell = rng.uniform(1, 2, n)
+    f = np.zeros((n, 3))
+    np.add.at(f, loc[:, 1], F)
+    np.add.at(f, loc[:, 0], -F)
+    np.testing.assert_allclose(kernels.scatter_pairs(loc, F, n), f, rtol=1e-14, atol=1e-14)
+    dyad = 0.5 * np.einsum("bi,bj->bij", F, d0)
+    s = np.zeros((n, 3, 3))
+    np.add.at(s, loc[:, 0], dyad)
+    np.add.at(s, loc[:, 1], dyad)
+    s /= cell[:, None, None]
+    sb = 0.5 * (s[loc[:, 0]] + s[loc[:, 1]])
+    sb = 0.5 * (sb + np.swapaxes(sb, 1, 2))
+    ref = np.stack([sb[:, 0, 0], sb[:, 1, 1], sb[:, 2, 2], sb[:, 1, 2], sb[:, 0, 2], sb[:, 0, 1]], axis=1)
+    np.testing.assert_allclose(kernels.bond_stress(loc, F, d0, cell, n), ref, rtol=1e-12, atol=1e-14)
+    k = HoffmanStrengths(1.5e9, 1.2e9, 50e6, 200e6, 50e6, 200e6, 60e6, 75e6, 75e6)
+    axes = np.array([np.linalg.qr(rng.normal(size=(3, 3)))[0] for _ in range(nb)])
+    stress = rng.normal(size=(nb, 6)) * 3e7
+    scale = rng.uniform(0.9, 1.0, nb)
+    got = kernels.hoffman_ply(stress, axes, scale, (k.Xt, k.Xc, k.Yt, k.Yc, k.Zt, k.Zc, k.S23, k.S13, k.S12))
+    np.testing.assert_allclose(got, hoffman(to_ply_axes(stress / scale[:, None], axes), k), rtol=1e-12)

@@ -153,8 +153,8 @@ class YadeBackend:
         """Slave the translations ``dofs`` of particles ``ids`` (all three and the rotations by
         default); their other degrees of freedom stay dynamic."""
         ids = np.asarray(ids, int)
-        self.prescribed = np.union1d(self.prescribed, ids) if dofs != "xyz" else ids
-        if dofs == "xyz":
+        if dofs == "xyz":  # fully slaved: their motion (and kinetic energy) belongs to the driver
+            self.prescribed = np.union1d(self.prescribed, ids)
             # slaved particles must not touch each other: the body they follow (the FEM)
             # already carries those forces; YADE skips pairs sharing avoidSelfInteractionMask
             for i in ids.tolist():
@@ -225,6 +225,8 @@ class YadeBackend:
         if self.O.iter > 0:
             v += 0.5 * self.O.dt * self.forces(np.arange(self.scene.n)) / m[:, None]
         m[self.prescribed] = 0.0
+        for i, comps in getattr(self, "_partial", {}).items():
+            v[i, comps] = 0.0  # the driven components of partly prescribed particles
         I = self.scene.inertia.copy()
         I[self.prescribed] = 0.0
         w = _rows(s.angVel for s in self._states)

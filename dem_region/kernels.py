@@ -1,0 +1,74 @@
+"""Per-step loops over bonds compiled with numba (the laws the coupling layer evaluates).
+
+numpy's scatter (np.add.at) and small einsums cost more than the arithmetic at the bond
+counts of a damage zone (10^2 .. 10^5 bonds, every engine step); these loops visit each bond
+once. Each mirrors a vectorised reference in laws.py / law_bonds.py, and the tests compare them.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def scatter_pairs(loc, F, n):
+    """(n, 3) N: +F (nb, 3) on each bond's second end, -F on its first (loc (nb, 2) rows)."""
+    f = np.zeros((n, 3))
+    for b in range(loc.shape[0]):
+        for k in range(3):
+            f[loc[b, 1], k] += F[b, k]
+            f[loc[b, 0], k] -= F[b, k]
+    return f
+
+
+@njit(cache=True)
+def bond_stress(loc, force, d0, cell, n):
+    """(nb, 6) Voigt Pa: mean of the end particles' Love-Weber stresses
+    sigma_p = sum_b (f_b (x) l_b) / (2 V_p), f_b = A_b t_b (tension positive), symmetrised."""
+    s = np.zeros((n, 3, 3))
+    for b in range(loc.shape[0]):
+        for i in range(3):
+            for j in range(3):
+                v = 0.5 * force[b, i] * d0[b, j]
+                s[loc[b, 0], i, j] += v
+                s[loc[b, 1], i, j] += v
+    out = np.empty((loc.shape[0], 6))
+    pairs = ((0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1))
+    for b in range(loc.shape[0]):
+        p, q = loc[b, 0], loc[b, 1]
+        for k in range(6):
+            i, j = pairs[k]
+            a = 0.5 * (s[p, i, j] + s[p, j, i]) / cell[p]
+            c = 0.5 * (s[q, i, j] + s[q, j, i]) / cell[q]
+            out[b, k] = 0.5 * (a + c)
+    return out
+
+
+@njit(cache=True)
+def hoffman_ply(stress, axes, scale, k):
+    """(nb,) Hoffman index of global Voigt stresses (nb, 6) / scale (nb,) in the bonds' ply axes
+    (nb, 3, 3) (columns); k = (Xt, Xc, Yt, Yc, Zt, Zc, S23, S13, S12)."""
+    Xt, Xc, Yt, Yc, Zt, Zc, S23, S13, S12 = k
+    X, Y, Z = 1 / (Xt * Xc), 1 / (Yt * Yc), 1 / (Zt * Zc)
+    pairs = ((0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1))
+    out = np.empty(stress.shape[0])
+    S = np.empty((3, 3))
+    P = np.empty((3, 3))
+    for b in range(stress.shape[0]):
+        for m in range(6):
+            i, j = pairs[m]
+            S[i, j] = S[j, i] = stress[b, m] / scale[b]
+        R = axes[b]
+        for a in range(3):
+            for c in range(3):
+                acc = 0.0
+                for i in range(3):
+                    for j in range(3):
+                        acc += R[i, a] * S[i, j] * R[j, c]
+                P[a, c] = acc
+        s1, s2, s3, t23, t13, t12 = P[0, 0], P[1, 1], P[2, 2], P[1, 2], P[0, 2], P[0, 1]
+        out[b] = (0.5 * (Y + Z - X) * (s2 - s3) ** 2 + 0.5 * (Z + X - Y) * (s3 - s1) ** 2
+                  + 0.5 * (X + Y - Z) * (s1 - s2) ** 2
+                  + (1 / Xt - 1 / Xc) * s1 + (1 / Yt - 1 / Yc) * s2 + (1 / Zt - 1 / Zc) * s3
+                  + (t23 / S23) ** 2 + (t13 / S13) ** 2 + (t12 / S12) ** 2)
+    return out
