@@ -88,9 +88,10 @@ class LawBonds:
             dn, ds = self.split(delta)
             closed = failed & (dn < 0)
             if closed.any():
-                rate = (ds[closed] - self.split(self.delta[closed])[1]) / dt
+                rate = (ds - self.split(self.delta)[1])[closed] / dt
                 tn = dn[closed] * np.broadcast_to(self.law.K, dn.shape)[closed]
-                t[closed] = tn[:, None] * self.normal[closed] + friction_traction(tn, rate, self.friction, self.v_reg)
+                # the bond traction acts on the second particle as -A t: friction against its slip
+                t[closed] = tn[:, None] * self.normal[closed] - friction_traction(tn, rate, self.friction, self.v_reg)
         newly = failed & ~(self.damage >= 1.0)
         self.time += dt
         self.t_failed[newly] = self.time

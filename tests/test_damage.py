@@ -36,11 +36,13 @@ def test_ply_fracture_strength_and_energy(femdem, angle, radius):
     assert_checks(s)
 
 
-def test_engine_without_added_forces_is_refused(femdem):
-    """LIGGGHTS cannot take added particle forces yet: one line, exit 2, no run left."""
-    code, s, err = femdem("run", "dcb_coarse", "--dem", "liggghts")
-    assert code == 2
-    assert "liggghts" in err and len(err.strip().splitlines()) == 1
+@pytest.mark.parametrize("case, args", [("dcb_coarse", []), ("ply_fracture", ["--mode", "dem"])])
+def test_laws_on_liggghts(femdem, case, args):
+    """The coupling layer's laws on the second engine pass the same checks (issue 7)."""
+    code, s, err = femdem("run", case, *args, "--dem", "liggghts")
+    assert code == 0, err
+    assert s["dem_backend"] == "liggghts"
+    assert_checks(s)
 
 
 @pytest.mark.slow

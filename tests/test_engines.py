@@ -27,6 +27,13 @@ class TestEngineConformance:
         assert code == 0
         assert_checks(s)
 
+    def test_penalty_tie(self, femdem, engine):
+        """The seed's transition contact (added forces on the engine's particles)."""
+        code, s, _ = femdem("run", "coupled_vibration", "--dem", engine, "--set", "interface.tie=penalty",
+                            "--set", "run.steps=3000")
+        assert code == 0
+        assert_checks(s)
+
     def test_coupled_vibration(self, femdem, engine):
         code, s, _ = femdem("run", "coupled_vibration", "--dem", engine, "--set", "run.steps=3000",
                             "--set", "clock.substeps=2")
@@ -65,10 +72,7 @@ def test_liggghts_low_restitution_deviates():
     assert 0.13 < e_out < 0.15
 
 
-@pytest.mark.parametrize("args", [
-    ["bond_strength"], ["bonded_block_modulus"],
-    ["coupled_vibration", "--set", "interface.tie=penalty", "--set", "run.steps=10"],
-])
+@pytest.mark.parametrize("args", [["bond_strength"], ["bonded_block_modulus"]])
 def test_what_liggghts_cannot_do_yet_is_refused(femdem, args):
     code, s, err = femdem("run", *args, "--dem", "liggghts")
     assert code == 2 and s is None and "liggghts" in err and len(err.strip().splitlines()) == 1

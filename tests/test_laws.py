@@ -159,3 +159,23 @@ def test_compiled_bond_kernels_match_numpy():
     scale = rng.uniform(0.9, 1.0, nb)
     got = kernels.hoffman_ply(stress, axes, scale, (k.Xt, k.Xc, k.Yt, k.Yc, k.Zt, k.Zc, k.S23, k.S13, k.S12))
     np.testing.assert_allclose(got, hoffman(to_ply_axes(stress / scale[:, None], axes), k), rtol=1e-12)
+
+
+def test_failed_bonds_in_compression_slide_with_friction():
+    """A fully failed bond pressed shut and sheared: normal penalty, Coulomb friction mu |t_n|
+    against the slip rate, momentum exact."""
+    from dem_region.law_bonds import LawBonds
+    X = np.array([[0.0, 0.0, 0.0], [0.0, 1e-3, 0.0], [1e-3, 0.0, 0.0], [1e-3, 1e-3, 0.0]])
+    bonds = LawBonds([[0, 1], [2, 3]], X, [[0.0, 1.0, 0.0]] * 2, 1e-6, AS4, friction=0.4)
+    bonds.damage[:] = 1.0
+    eng = _PointEngine(X.copy())
+    bonds.apply(eng, 0.0)
+    for k in range(1, 5):
+        eng.x[1] = X[1] + [1e-7 * k, -2e-7, 0.0]  # closed, sliding +x; the second pair stays put
+        eng.f[:] = 0.0
+        bonds.apply(eng, 1e-6)
+    tn = -2e-7 * AS4.K
+    assert eng.f[1, 1] == pytest.approx(-1e-6 * tn)  # pushed back out
+    assert eng.f[1, 0] == pytest.approx(-0.4 * abs(tn) * 1e-6, rel=1e-3)  # friction against the slip
+    np.testing.assert_allclose(eng.f[2:], 0.0, atol=0)
+    np.testing.assert_allclose(eng.f.sum(axis=0), 0.0, atol=1e-12)

@@ -288,7 +288,7 @@ def _build_fem(p, t, width_factor, t_end):
     probes = {"centre_displacement": lambda: -float(dyn.state.u[bottom, 1]),
               "contact_force": lambda: float(imp.a[1] * imp.mass * width_factor),
               "impactor_velocity": lambda: float(imp.v[1])}
-    return fem_only(dyn, p, t_end, probes, guards=fem_guards(dyn))
+    return fem_only(dyn, p, t_end, probes)
 
 
 def evaluate(p: dict, h: dict, mode: str):

@@ -14,8 +14,18 @@ Stepping (velocity Verlet, ``run 1 pre no post no``) leaves on-step velocities; 
 coupled clock the same time level. Prescribed particles: ``fix store/force`` (their force
 from the rest of the scene) then ``fix setforce 0 0 0`` and a written velocity.
 
-Not available on this engine (refused with a clear message): bond breakage, Cundall damping
-(virtual calibration tests), walls, penalty ties (added forces), checkpoint / restore.
+Added forces (penalty ties, bond laws and impactors the coupling layer evaluates): the hook
+runs after the step's force evaluation and final half kick, so an added force f goes into
+LIGGGHTS' force array (the next step's first half kick uses it) and its missing final half
+kick dt/2 f/m into the velocity: exactly velocity Verlet with f included, no fix needed. On
+held particles (setforce) the added force is only reported by ``forces`` (their motion is
+prescribed). Partial prescriptions (a symmetry plane): ``fix setforce`` on those components.
+
+Not available on this engine (refused with a clear message): native bond breakage (laws
+evaluated by the coupling layer replace it), Cundall damping (virtual calibration tests),
+walls, checkpoint / restore. Bonded particles share one molecule, so fragments of a bonded
+zone do not touch through the granular model (YADE's do); law bonds keep their compressive
+contact.
 """
 from __future__ import annotations
 
@@ -120,6 +130,8 @@ class LiggghtsBackend:
             for t, (kn, length) in enumerate(types):
                 self._cmd(f"bond_coeff {t + 1} {kn / 2:.17g} {length:.17g}")
         self._cmd("fix integ all nve/sphere")
+        # every particle's force before any setforce (held and partly held ones report it)
+        self._cmd("fix sf all store/force")
         if scene.plane:
             self._cmd("fix plane all setforce NULL NULL 0.0")  # quasi-2D: no out-of-plane motion
         self.X, self.V, self.F = (self._array(k, 3) for k in ("x", "v", "f"))
@@ -133,6 +145,8 @@ class LiggghtsBackend:
         self._bond_K = types[btype, 0] / 2 if len(scene.bonds) else np.zeros(0)
         self._bond_r0 = types[btype, 1] if len(scene.bonds) else np.zeros(0)
         self.prescribed = np.zeros(0, int)
+        self._partial: dict[int, list[int]] = {}
+        self._added = np.zeros((n, 3))  # forces added to held particles since the last step (reported only)
         self._store = None
         self._track_damping = not len(scene.bonds) and scene.restitution < 1.0
         self._dissipated, self._fd_prev = 0.0, np.zeros((n, 3))
@@ -167,7 +181,13 @@ class LiggghtsBackend:
 
     def advance(self, between: Callable[[], None] | None = None) -> None:
         x_old = self.X.copy() if self._track_damping else None
-        self.lib.lammps_command(self.h, b"run 1 pre no post no")
+        self._added[:] = 0.0
+        if getattr(self, "_setup_needed", False):  # fixes added since the last run need a setup
+            self.lib.lammps_command(self.h, b"run 1 pre yes post no")
+            self._refresh_store()
+            self._setup_needed = False
+        else:
+            self.lib.lammps_command(self.h, b"run 1 pre no post no")
         if x_old is not None:
             self._book_damping(x_old)
         if between is not None:
@@ -205,29 +225,57 @@ class LiggghtsBackend:
 
     # -- interface data ----------------------------------------------------------------------
     def prescribe(self, ids: np.ndarray, dofs: str = "xyz") -> None:
-        if dofs != "xyz":
-            raise NotImplementedError("liggghts adapter: partial prescriptions (virtual tests) not available yet")
-        self.prescribed = np.asarray(ids, int)
+        ids = np.asarray(ids, int)
+        self._setup_needed = True
+        if dofs != "xyz":  # only these components are driven (e.g. a symmetry plane)
+            k = len(self._partial)
+            self._group(f"part{k}", ids)
+            comps = " ".join("0.0" if c in dofs else "NULL" for c in "xyz")
+            self._cmd(f"fix part{k} part{k} setforce {comps}")
+            for i in ids.tolist():
+                self._partial[i] = ["xyz".index(c) for c in dofs]
+            return
+        if len(self.prescribed):
+            raise NotImplementedError("liggghts adapter: one fully prescribed set (the interface) per scene")
+        self.prescribed = ids
         self._group("iface", self.prescribed)
-        self._cmd("fix sf iface store/force\nfix hold iface setforce 0 0 0")
-        self._store = None
+        self._cmd("fix hold iface setforce 0 0 0")
 
     def _refresh_store(self) -> None:
-        if len(self.prescribed):
-            p = ctypes.cast(self.lib.lammps_extract_fix(self.h, b"sf", 1, 2, 0, 0),
-                            ctypes.POINTER(ctypes.POINTER(ctypes.c_double)))
-            self._store = np.ctypeslib.as_array(p[0], shape=(self.scene.n, 3))
+        """View of the store/force fix's per-atom array (allocated by the first run)."""
+        p = ctypes.cast(self.lib.lammps_extract_fix(self.h, b"sf", 1, 2, 0, 0),
+                        ctypes.POINTER(ctypes.POINTER(ctypes.c_double)))
+        self._store = np.ctypeslib.as_array(p[0], shape=(self.scene.n, 3))
 
     def set_velocities(self, ids: np.ndarray, v: np.ndarray) -> None:
-        self.V[np.asarray(ids, int)] = v
+        ids, v = np.asarray(ids, int), np.asarray(v, float)
+        if self._partial and np.isin(ids, list(self._partial)).any():
+            for row, i in enumerate(ids.tolist()):
+                comps = self._partial.get(i)
+                if comps is None:
+                    self.V[i] = v[row]
+                else:
+                    self.V[i, comps] = v[row, comps]
+            return
+        self.V[ids] = v
+
+    def add_forces(self, ids: np.ndarray, F: np.ndarray) -> None:
+        """Forces F (k, 3) N added to particles ``ids`` at this step (call from the hook)."""
+        ids, F = np.asarray(ids, int), np.asarray(F, float)
+        np.add.at(self._added, ids, F)
+        held = np.isin(ids, self.prescribed)
+        free, Ff = ids[~held], F[~held]
+        if self.scene.plane:
+            Ff = Ff * [1.0, 1.0, 0.0]
+        for i, comps in ((i, self._partial[i]) for i in set(free.tolist()) & self._partial.keys()):
+            Ff[free == i, comps] = 0.0  # driven components take no force (as setforce)
+        np.add.at(self.F, free, Ff)
+        np.add.at(self.V, free, 0.5 * self.dt * Ff / self.mass[free, None])
 
     def forces(self, ids: np.ndarray) -> np.ndarray:
+        """(k, 3) N: the engine's force before any setforce, plus what was added this step."""
         ids = np.asarray(ids, int)
-        out = self.F[ids].copy()
-        if self._store is not None:
-            held = np.isin(ids, self.prescribed)
-            out[held] = self._store[ids[held]]
-        return out
+        return self._store[ids] + self._added[ids]
 
     def positions_of(self, ids: np.ndarray) -> np.ndarray:
         return self.X[np.asarray(ids, int)].copy()
@@ -246,7 +294,10 @@ class LiggghtsBackend:
         m[self.prescribed] = 0.0
         m[self.scene.groups.get("fixed", np.zeros(0, int))] = 0.0
         I = 0.4 * m * self.scene.radius**2
-        kinetic = 0.5 * float(np.einsum("n,ni,ni->", m, self.V, self.V) + np.einsum("n,ni,ni->", I, self.W, self.W))
+        V = self.V.copy()
+        for i, comps in self._partial.items():
+            V[i, comps] = 0.0
+        kinetic = 0.5 * float(np.einsum("n,ni,ni->", m, V, V) + np.einsum("n,ni,ni->", I, self.W, self.W))
         elastic = 0.0
         if len(self.scene.bonds):
             i, j = self.scene.bonds.T
