@@ -12,6 +12,17 @@ delta = (x_j - x_i) - (X_j - X_i), split on the initial unit normal n0 (opening 
 and the tangential slip ds. The traction t (Pa) acts on an area A (m^2): F_j = -A t,
 F_i = +A t, so momentum is exact.
 
+Interface bonds (``along``: each bond's neighbours along the interface) measure the slip
+free of rotation: a pair of particles a distance h apart across the interface moves apart
+tangentially by h du_n/ds under a rigid rotation (and under bending), which is not slip. The
+slip is ds = (delta . e_t) + h d(u_n)/ds with the derivative of the pairs' mean normal
+displacement by central differences along the interface (e_t from the previous to the next
+pair): the engineering shear strain of the layer times h. Its work-conjugate forces include
+normal forces on the neighbouring pairs, the couple that balances the pair's shear couple,
+so angular momentum is exact too. (A shear spring on the raw relative translation resists
+rotation instead: a [0_6/90_4/0_6] lattice cantilever with such interfaces came out 2.35 x
+too compliant; with this slip it is within 5 % of the FEM.)
+
 Energy is measured, not assumed: the work of the bond forces on the separations is summed
 by the trapezoidal rule; the stored energy is the elastic part of the current traction;
 dissipated = work - stored (decohesion plus friction).
@@ -45,6 +56,7 @@ class LawBonds:
     law: object
     friction: float = 0.0
     volume: np.ndarray | None = None
+    along: np.ndarray | None = None  # (nb, 2) previous / next bond along the interface, -1 at an end
     v_reg: float = 1e-3
     label: str = "interlaminar"
 
@@ -64,6 +76,19 @@ class LawBonds:
         self.work = 0.0  # J, work of the bond forces on the separations (slice)
         self.t_failed = np.full(nb, np.nan)  # s, when each bond reached full decohesion
         self.time = 0.0
+        if self.along is not None:
+            self.along = np.asarray(self.along, int).reshape(nb, 2)
+            prev, nxt = self.along.T
+            a = np.where(prev >= 0, prev, np.arange(nb))
+            b = np.where(nxt >= 0, nxt, np.arange(nb))
+            mid = 0.5 * (X[self.pairs[:, 0]] + X[self.pairs[:, 1]])
+            e = mid[b] - mid[a]
+            span = np.linalg.norm(e, axis=1)
+            if np.any(span == 0):
+                raise ValueError("an interface bond has no neighbour along the interface")
+            self._a, self._b, self._e_t = a, b, e / span[:, None]
+            self._h_over_span = np.linalg.norm(self.d0, axis=1) / span
+            self._X_mid = mid
         if hasattr(self.law, "initiate"):
             if self.volume is None:
                 raise ValueError("this law initiates on the particle stress: give the particles' volume")
@@ -80,6 +105,10 @@ class LawBonds:
         a step of dt s; returns the force (nb, 3) N on each bond's second particle."""
         i, j = self._loc.T
         delta = x[j] - x[i] - self.d0
+        if self.along is not None:  # rotation-free slip: + h d(u_n)/ds along the interface
+            un = np.einsum("bi,bi->b", 0.5 * (x[i] + x[j]) - self._X_mid, self.normal)
+            self._grad = self._h_over_span * (un[self._b] - un[self._a])
+            delta = delta + self._grad[:, None] * self._e_t
         if hasattr(self.law, "initiate"):
             self.law.initiate(self.bond_stress(), np.einsum("bi,bi->b", delta, self.normal))
         t, d = self.law.tractions_fast(delta, self.normal, self.damage)
@@ -104,6 +133,12 @@ class LawBonds:
         """Read the bonded particles from the engine, evaluate, add the bond forces."""
         F = self.evaluate(backend.positions_of(self.ids), dt)
         f = kernels.scatter_pairs(self._loc, F, len(self.ids))
+        if self.along is not None:  # the slip's gradient term: normal forces on the neighbours
+            q = 0.5 * self.area * self._h_over_span * np.einsum("bi,bi->b", self.traction, self._e_t)
+            for nb_, sign in ((self._b, 1.0), (self._a, -1.0)):
+                g = -sign * q[:, None] * self.normal[nb_]  # on each particle of the neighbour pair
+                np.add.at(f, self._loc[nb_, 0], g)
+                np.add.at(f, self._loc[nb_, 1], g)
         loaded = np.flatnonzero(np.any(f != 0.0, axis=1))  # open, failed bonds carry nothing
         backend.add_forces(self.ids[loaded], f[loaded])
 

@@ -87,6 +87,7 @@ class PlyLattice:
     inter_pairs: np.ndarray
     inter_K: float
     d: float
+    inter_along: np.ndarray | None = None  # (ni, 2) neighbour pairs along each interface
 
     @property
     def n(self) -> int:
@@ -136,10 +137,14 @@ def build(x0: float, n_columns: int, y0: float, rows_per_ply: list[int], angles:
     law = PlyBondLaw(np.array(K), np.array(Gf), material.strengths, np.array(axes))
     inter = [(idx(c, j), idx(c, j + 1)) for j in range(n_rows - 1) if ply_of_row[j] != ply_of_row[j + 1]
              for c in range(n_columns)]
+    k = np.arange(len(inter))
+    c = k % n_columns  # pairs run along each interface row by column
+    along = np.column_stack([np.where(c > 0, k - 1, -1), np.where(c < n_columns - 1, k + 1, -1)])
     sphere_rho = material.rho * d**3 / (4.0 / 3.0 * np.pi * (d / 2) ** 3)
     E_y = min(material.in_plane(a)[1] for a in angles)
     return PlyLattice(x, d / 2, np.full(len(x), sphere_rho), ply_of_row[row], col, row,
-                      np.array(pairs, int).reshape(-1, 2), law, np.array(inter, int).reshape(-1, 2), E_y / d, d)
+                      np.array(pairs, int).reshape(-1, 2), law, np.array(inter, int).reshape(-1, 2), E_y / d, d,
+                      along)
 
 
 def interlaminar_law(lattice: PlyLattice, Z0: float, R0: float, GIc: float, GIIc: float, eta: float = 2.284,

@@ -179,3 +179,49 @@ def test_failed_bonds_in_compression_slide_with_friction():
     assert eng.f[1, 0] == pytest.approx(-0.4 * abs(tn) * 1e-6, rel=1e-3)  # friction against the slip
     np.testing.assert_allclose(eng.f[2:], 0.0, atol=0)
     np.testing.assert_allclose(eng.f.sum(axis=0), 0.0, atol=1e-12)
+
+
+def _interface_row(n=6, h=1e-3):
+    """n vertical pairs along x (spacing h), joined by an interface LawBonds with neighbours."""
+    from dem_region.law_bonds import LawBonds
+    X = np.array([[c * h, y, 0.0] for c in range(n) for y in (0.0, h)])
+    pairs = np.arange(2 * n).reshape(n, 2)
+    k = np.arange(n)
+    along = np.column_stack([np.where(k > 0, k - 1, -1), np.where(k < n - 1, k + 1, -1)])
+    return X, LawBonds(pairs, X, [[0.0, 1.0, 0.0]] * n, h * h, AS4, along=along)
+
+
+def test_interface_slip_ignores_rotation():
+    """A rigid rotation of an interface gives no traction; a uniform shear gives K gamma h."""
+    X, bonds = _interface_row()
+    c, s_ = np.cos(1e-4), np.sin(1e-4)
+    R = np.array([[c, -s_, 0], [s_, c, 0], [0, 0, 1]])
+    eng = _PointEngine(X @ R.T)
+    bonds.apply(eng, 0.0)
+    # tangential forces vanish; normal ones are second order (fixed normals): K A h theta^2
+    assert np.abs(eng.f[:, 0]).max() < 1e-6 * AS4.K * 1e-6 * 1e-3 * 1e-4
+    assert np.abs(eng.f[:, 1]).max() < 2 * AS4.K * 1e-6 * 1e-3 * 1e-8
+    X, bonds = _interface_row()
+    gamma = 1e-5
+    eng = _PointEngine(X + np.column_stack([gamma * X[:, 1], 0 * X[:, 0], 0 * X[:, 0]]))
+    bonds.apply(eng, 0.0)
+    np.testing.assert_allclose(bonds.traction[:, 0], AS4.K * gamma * 1e-3, rtol=1e-9)
+
+
+@settings(max_examples=20, deadline=None, derandomize=True)
+@given(seed=st.integers(0, 10_000))
+def test_interface_forces_balance_forces_and_moments(seed):
+    """Any small deformation: the interface's forces sum to zero and their net moment is of
+    second order (small-rotation kinematics), where a shear spring on the raw relative
+    translation leaves a first-order moment (it resists rotation)."""
+    from dem_region.law_bonds import LawBonds
+    X, bonds = _interface_row()
+    x = X + np.random.default_rng(seed).normal(size=X.shape) * [1e-7, 1e-7, 0.0]
+    raw = LawBonds(bonds.pairs, X, bonds.normal, 1e-6, AS4)
+    moments = []
+    for b in (bonds, raw):
+        eng = _PointEngine(x)
+        b.apply(eng, 0.0)
+        np.testing.assert_allclose(eng.f.sum(axis=0), 0.0, atol=1e-12 * np.abs(eng.f).max())
+        moments.append(abs(np.cross(x, eng.f).sum(axis=0)[2]))
+    assert moments[0] < 1e-2 * moments[1]

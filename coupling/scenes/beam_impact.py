@@ -184,7 +184,7 @@ def particle_zone(p: dict, x_end: float, clamp_last: bool):
     law = ply_lattice.interlaminar_law(lat, Z0, R0, p["interface.GIc"], p["interface.GIIc"])
     inter_area = np.where(on_axis[lat.inter_pairs].all(axis=1), 0.5, 1.0) * d * t
     inter = LawBonds(lat.inter_pairs, lat.x, np.tile([0.0, 1.0, 0.0], (len(lat.inter_pairs), 1)), inter_area, law,
-                     friction=p["interface.friction"], label="interlaminar")
+                     friction=p["interface.friction"], label="interlaminar", along=lat.inter_along)
     density_ = lat.density * np.where(on_axis, 0.5, 1.0)
     groups = {}
     last = np.flatnonzero(lat.column == lat.column.max())

@@ -174,8 +174,10 @@ def build_specimen(p: dict, a0: float, x_a: float, x_b: float, omega_arm: float,
                             GIIc=p["interface.GIIc"], eta=p["interface.eta"], mixed_mode=p["interface.mixed_mode"])
     area = np.full(n_win + 1, d * t)
     area[[0, -1]] *= 0.5  # end columns carry half a spacing
+    k = np.arange(n_win + 1)
+    along = np.column_stack([np.where(k > 0, k - 1, -1), np.where(k < n_win, k + 1, -1)])
     bonds = LawBonds(np.column_stack([lower, upper]), x, np.tile([0.0, 1.0, 0.0], (n_win + 1, 1)), area, law,
-                     friction=p["interface.friction"])
+                     friction=p["interface.friction"], along=along)
     bonds.damage[cols < a0 - 1e-9 * d] = 1.0  # the initial crack: faces in contact only
     bonds.t_failed[cols < a0 - 1e-9 * d] = 0.0
 
