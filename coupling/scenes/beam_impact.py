@@ -220,7 +220,12 @@ def _damage_probes(p, lat, intra, inter, scale_len: float):
     weight[lat.column[lat.inter_pairs[:, 0]] == lat.column.max()] = 0.0  # the tied column: on the FEM face
     probes = {f"delamination_length_{k}": (lambda sel=(iface_row == r): float(weight[sel] @ inter.failed()[sel]))
               for k, r in enumerate(rows)}
+    probes.update({f"damaged_interface_length_{k}": (lambda sel=(iface_row == r): float(weight[sel] @ (inter.damage[sel] > 0)))
+                   for k, r in enumerate(rows)})
     probes["matrix_cracks"] = lambda: float(np.sum(intra.failed() & in_90))
+    # damage must stay inside the particle zone: the last columns before the tie (or clamp)
+    edge = lat.column[lat.inter_pairs[:, 0]] >= lat.column.max() - 2
+    probes["damage_at_zone_edge"] = lambda: float(inter.damage[edge].max()) if edge.any() else 0.0
     probes["failed_intralaminar"] = lambda: float(np.sum(intra.failed()))
     return probes
 
@@ -257,13 +262,15 @@ def build(p: dict, mode: str, dem: str):
         "centre_displacement": lambda: -float(backend.positions_of(np.array([bottom]))[0, 1] - lat.x[bottom, 1]),
         "contact_force": lambda: float(impactor.force[1] * width_factor),
         "impactor_velocity": lambda: float(impactor.imp.v[1]),
+        "model_size": lambda: float(fem_count[0] + lat.n),  # elements + particles
         **_damage_probes(p, lat, intra, inter, t),
     })
     sim.counts.update({"law_bonds": len(intra.pairs) + len(inter.pairs)})
     for t_snap in (0.1e-3, 0.6e-3):
         sim.snapshots[f"damage_{round(t_snap * 1e6)}us"] = (t_snap, lambda: {
             "x": backend.positions(), "intra_failed": intra.failed().astype(float),
-            "inter_failed": inter.failed().astype(float), "intra_pairs": intra.pairs.astype(float),
+            "inter_failed": inter.failed().astype(float), "inter_damage": inter.damage.copy(),
+            "intra_damage": intra.damage.copy(), "intra_pairs": intra.pairs.astype(float),
             "inter_pairs": inter.pairs.astype(float), "in_90": (np.array(blocks(p)[0])[lat.ply] == 90).astype(float)})
     return sim
 
@@ -286,6 +293,7 @@ def _build_fem(p, t, width_factor, t_end):
                                              PrescribedMotion(2 * axis)], impactors=[imp])
     bottom = axis[np.argmin(X[axis, 1])]
     probes = {"centre_displacement": lambda: -float(dyn.state.u[bottom, 1]),
+              "model_size": lambda: float(region.n_elements),
               "contact_force": lambda: float(imp.a[1] * imp.mass * width_factor),
               "impactor_velocity": lambda: float(imp.v[1])}
     return fem_only(dyn, p, t_end, probes)
@@ -297,14 +305,22 @@ def evaluate(p: dict, h: dict, mode: str):
     qoi = {"peak_centre_displacement": float(u[k]), "time_of_peak_displacement": float(time[k]),
            "peak_contact_force": float(F.max()), "spring_mass_estimate": spring_mass_estimate(p)}
     for key in h:
-        if key.startswith("delamination_length_") or key in ("matrix_cracks", "failed_intralaminar"):
+        if key.startswith(("delamination_length_", "damaged_interface_length_")) or key in ("matrix_cracks",
+                                                                                           "failed_intralaminar"):
             qoi[key] = float(np.asarray(h[key])[-1])
+    qoi["model_size"] = float(h["model_size"][-1])
+    if "damage_at_zone_edge" in h:
+        qoi["damage_at_zone_edge"] = float(np.max(h["damage_at_zone_edge"]))
+    qoi["model_size_vs_reference"] = qoi["model_size"] / REFERENCE_ELEMENTS
     checks = {
         "peak_centre_displacement": check(qoi["peak_centre_displacement"], qoi["spring_mass_estimate"], 0.30,
                                           "spring-mass estimate v sqrt(M / k), k = 192 D / L^3 (an estimate)"),
         "energy_balance": bound(abs(float(np.asarray(h["balance_error_rel"])[-1])), 0.02,
                                 "energy ledger: external work = kinetic + internal + dissipated"),
     }
+    if mode == "coupled":  # the FEM far field cannot delaminate: damage must end inside the zone
+        checks["damage_at_zone_edge"] = bound(qoi["damage_at_zone_edge"], 0.5,
+                                              "interlaminar damage next to the tie (widen dem.half_width if not)")
     return qoi, checks
 
 
@@ -331,21 +347,29 @@ def plot(p: dict, h: dict, qoi: dict, plots_dir):
 
 
 def _damage_picture(h: dict, name: str, plots_dir):
-    """Particles (deformed), cracked intralaminar bonds (red: 90 plies, orange: 0 plies) and
-    delaminated interfaces (blue)."""
+    """Particles (deformed), intralaminar bonds by damage (reds: 90 plies, oranges: 0 plies)
+    and interlaminar bonds by damage (blues; full colour = debonded)."""
     import matplotlib.pyplot as plt
-    x = np.asarray(h[f"{name}.x"])
-    fig, ax = plt.subplots(figsize=(12, 3))
-    ax.plot(1e3 * x[:, 0], 1e3 * x[:, 1], ".", ms=1.5, color="0.6")
-    for kind, color in (("intra", None), ("inter", "tab:blue")):
+    from matplotlib.collections import LineCollection
+    x = 1e3 * np.asarray(h[f"{name}.x"])
+    in_90 = np.asarray(h[f"{name}.in_90"]) > 0
+    fig, ax = plt.subplots(figsize=(12, 3.2))
+    ax.plot(x[:, 0], x[:, 1], ".", ms=1.5, color="0.7")
+    for kind in ("intra", "inter"):
         pairs = np.asarray(h[f"{name}.{kind}_pairs"]).astype(int)
-        failed = np.asarray(h[f"{name}.{kind}_failed"]) > 0
-        in_90 = np.asarray(h[f"{name}.in_90"]) > 0
-        for i, j in pairs[failed]:
-            c = color or ("tab:red" if in_90[i] and in_90[j] else "tab:orange")
-            ax.plot(1e3 * x[[i, j], 0], 1e3 * x[[i, j], 1], "-", color=c, lw=1.2)
-    ax.set(xlabel="x (mm)", ylabel="y (mm)", title=f"damage at {name.split('_')[1]} (red: matrix cracks in 90 "
-           "plies, orange: 0 plies, blue: delamination)")
+        dmg = np.asarray(h[f"{name}.{kind}_damage"])
+        hit = dmg > 0.05
+        if not hit.any():
+            continue
+        segs = x[pairs[hit]][:, :, :2]
+        if kind == "inter":
+            colors = plt.cm.Blues(0.3 + 0.7 * dmg[hit])
+        else:
+            ninety = in_90[pairs[hit]].all(axis=1)
+            colors = np.where(ninety[:, None], plt.cm.Reds(0.3 + 0.7 * dmg[hit]), plt.cm.Oranges(0.3 + 0.7 * dmg[hit]))
+        ax.add_collection(LineCollection(segs, colors=colors, linewidths=1.5))
+    ax.set(xlabel="x (mm)", ylabel="y (mm)", title=f"damage at {name.split('_')[1]}: interlaminar (blue) and "
+           "intralaminar (red: 90 plies, orange: 0 plies), darker = more damaged")
     ax.set_aspect("equal")
     fig.tight_layout()
     fig.savefig(plots_dir / f"{name}.png", dpi=120)

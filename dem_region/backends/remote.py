@@ -30,6 +30,7 @@ class RemoteBackend:
 
     def __init__(self, engine: str, python: str | None = None, env: dict | None = None):
         self.name = engine
+        self.can_checkpoint = engine != "lammps"  # its adapter has no restart files yet
         parent, child = socket.socketpair()
         env = dict(env if env is not None else os.environ)
         env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
@@ -64,6 +65,8 @@ class RemoteBackend:
         self._send(msg)
         reply = self._recv()
         if reply[0] == "error":
+            if reply[2:] == ("NotImplementedError",):
+                raise NotImplementedError(reply[1])
             raise RuntimeError(f"{self.name} worker: {reply[1]}")
         return reply
 
@@ -77,7 +80,10 @@ class RemoteBackend:
     def set_dt(self, dt: float) -> None:
         self._call("set_dt", float(dt))
 
-    def prescribe(self, ids: np.ndarray) -> None:
+    def prescribe(self, ids: np.ndarray, dofs: str = "xyz") -> None:
+        if dofs != "xyz":  # a partial prescription (symmetry plane): no interface arrays
+            self._call("call", "prescribe", np.asarray(ids).tolist(), dofs)
+            return
         self.ids = self.prescribed = np.asarray(ids, int)
         nbytes = max(8, 8 * 3 * len(self.ids))
         self.blocks = [shared_memory.SharedMemory(create=True, size=nbytes) for _ in range(2)]
@@ -85,7 +91,7 @@ class RemoteBackend:
         self._call("prescribe", self.ids.tolist(), self.blocks[0].name, self.blocks[1].name)
 
     def _run(self, op: str, between: Callable[[], None] | None, n: int = 1) -> None:
-        self._send((op, n))
+        self._send((op, n, between is not None))
         while True:
             msg = self._recv()
             if msg[0] == "hook":
@@ -109,12 +115,14 @@ class RemoteBackend:
         return np.asarray(self._call("call", "forces", np.asarray(ids).tolist())[1])
 
     def set_velocities(self, ids: np.ndarray, v: np.ndarray) -> None:
-        if not np.array_equal(ids, self.ids):
-            raise ValueError("remote engines take velocities only for the prescribed interface set")
-        self.V[:] = v
+        if len(ids) == len(self.ids) and np.array_equal(ids, self.ids):
+            self.V[:] = v  # read by the worker when its hook hands back
+        else:
+            self._call("call", "set_velocities", np.asarray(ids).tolist(), np.asarray(v).tolist())
 
     def add_forces(self, ids: np.ndarray, F: np.ndarray) -> None:
-        self._call("call", "add_forces", np.asarray(ids).tolist(), np.asarray(F).tolist())
+        if len(ids):
+            self._call("call", "add_forces", np.asarray(ids).tolist(), np.asarray(F).tolist())
 
     def positions_of(self, ids: np.ndarray) -> np.ndarray:
         return np.asarray(self._call("call", "positions_of", np.asarray(ids).tolist())[1])
