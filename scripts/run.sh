@@ -3,5 +3,5 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/setup.sh
-MAIN_CASE=${MAIN_CASE:-chain_consistency}
+MAIN_CASE=${MAIN_CASE:-beam_impact}
 exec .venv/bin/femdem run "$MAIN_CASE" "$@"

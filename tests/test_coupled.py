@@ -23,11 +23,14 @@ def test_chain_consistency_matches_monolithic(femdem, sets):
     assert set(s["timing_s"]) >= {"fem", "dem", "interface", "io", "orchestrator", "total"}
 
 
-@pytest.mark.parametrize("engine", ["lammps"])
-def test_engines_not_built_yet_are_refused_clearly(femdem, engine):
-    code, s, err = femdem("run", "chain_consistency", "--dem", engine)
+def test_engine_without_its_environment_is_refused_clearly(femdem, monkeypatch):
+    """A worker engine whose environment is missing: one line with the fix, exit 2."""
+    from pathlib import Path
+    import dem_region.backends as backends
+    monkeypatch.setitem(backends.WORKER_ONLY, "lammps", Path("/nonexistent/venv/bin/python"))
+    code, s, err = femdem("run", "chain_consistency", "--dem", "lammps")
     assert code == 2 and s is None
-    assert engine in err and "not implemented" in err and len(err.strip().splitlines()) == 1
+    assert "lammps" in err and "setup.sh" in err and len(err.strip().splitlines()) == 1
 
 
 def _region(kind, nx, ny, jitter, seed):

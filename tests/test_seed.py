@@ -17,6 +17,8 @@ def test_beam_impact_coarse(femdem, tmp_path):
     q = s["qoi"]
     assert {"peak_contact_force", "delamination_length_0", "delamination_length_1", "matrix_cracks"} <= set(q)
     assert q["model_size_vs_reference"] < 0.05
+    assert 0.0 <= q["damage_at_zone_edge"] <= 1.0
+    assert q["damaged_interface_length_0"] > 0 and q["damaged_interface_length_1"] > 0  # both 0/90 interfaces
 
 
 def test_beam_impact_coupled_equals_fem_when_elastic(femdem):
