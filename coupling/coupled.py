@@ -28,6 +28,36 @@ from fem_region.explicit import ExplicitDynamics
 from .simulation import Stage
 
 
+class ModelStep:
+    """What the coupling-layer models see of the engine during one hook: positions read once
+    for the union of their particles, their forces summed and handed over in one call (YADE
+    costs ~1 us per particle per call from Python: three models reading and writing
+    separately tripled it)."""
+
+    def __init__(self, backend, models):
+        self.backend = backend
+        self.ids = np.unique(np.concatenate([m.ids for m in models])) if models else np.zeros(0, int)
+        self._index = np.full(int(self.ids.max()) + 1 if len(self.ids) else 0, -1)
+        self._index[self.ids] = np.arange(len(self.ids))
+
+    def run(self, models, dt: float) -> None:
+        if not models:
+            return
+        self._x = self.backend.positions_of(self.ids)
+        self._f = np.zeros((len(self.ids), 3))
+        for model in models:
+            model.apply(self, dt)
+        loaded = np.flatnonzero(np.any(self._f != 0.0, axis=1))
+        if loaded.size:
+            self.backend.add_forces(self.ids[loaded], self._f[loaded])
+
+    def positions_of(self, ids: np.ndarray) -> np.ndarray:
+        return self._x[self._index[np.asarray(ids, int)]]
+
+    def add_forces(self, ids: np.ndarray, F: np.ndarray) -> None:
+        np.add.at(self._f, self._index[np.asarray(ids, int)], np.asarray(F, float).reshape(-1, 3))
+
+
 class CoupledClock:
     """One FEM participant, one DEM participant, one tie; m DEM steps per FEM step."""
 
@@ -36,6 +66,7 @@ class CoupledClock:
         self.fem, self.dem, self.tie = fem, dem, tie
         # coupling-layer models acting on the engine's particles (LawBonds, ParticleImpactor)
         self.models = list(models)
+        self._model_step = ModelStep(dem, self.models)
         self.m, self.dt = int(substeps), dt_fem
         self.dt_dem = dt_fem / self.m
         self.k = 0  # DEM steps whose forces have been handed over
@@ -53,8 +84,8 @@ class CoupledClock:
         clock = time.perf_counter
         fem = self.fem
         t0 = clock()
-        for model in self.models:  # first, so that the interface forces include theirs
-            model.apply(self.dem, self.dt_dem if self.k else 0.0)
+        # first, so that the interface forces include theirs
+        self._model_step.run(self.models, self.dt_dem if self.k else 0.0)
         t_law = clock()
         f_tie = self.f_tie = self.tie.fast_force(fem.region.X + fem.state.u)
         t1 = clock()

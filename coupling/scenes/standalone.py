@@ -59,11 +59,11 @@ def dem_only(p: dict, scene: DemScene, dem: str, t_end_default: float,
         driver = PrescribedParticles(backend, drive[0], drive[1], dt, drive_dofs) if drive else None
         hook = driver.between if driver else None
         if models:
-            steps = [0]
+            from ..coupled import ModelStep
+            steps, view = [0], ModelStep(backend, list(models))
 
             def hook(drive_between=hook):
-                for model in models:  # their forces first: the drive reads the forces they add
-                    model.apply(backend, dt if steps[0] else 0.0)
+                view.run(list(models), dt if steps[0] else 0.0)  # first: the drive reads their forces
                 steps[0] += 1
                 if drive_between:
                     drive_between()
