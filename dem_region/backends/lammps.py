@@ -31,9 +31,10 @@ from typing import Callable
 import numpy as np
 
 from ..scene import DemScene
+from .lammps_family import VerletArrays
 
 
-class LammpsBackend:
+class LammpsBackend(VerletArrays):
     """DEM back-end on one LAMMPS instance (in the LAMMPS worker process)."""
 
     name = "lammps"
@@ -136,11 +137,6 @@ class LammpsBackend:
         self.X, self.V, self.F = (np.asarray(self.lmp.numpy.extract_atom(k))[:n] for k in ("x", "v", "f"))
         self._store = np.asarray(self.lmp.numpy.extract_fix("sf", 1, 2))[:n]
 
-    def _group(self, name: str, ids: np.ndarray) -> None:
-        ids = np.asarray(ids, int) + 1
-        for chunk in np.array_split(ids, max(1, len(ids) // 500)):  # keep command lines short
-            self._cmd(f"group {name} id {' '.join(map(str, chunk.tolist()))}")
-
     def critical_dt(self) -> float:
         return self.scene.critical_dt()
 
@@ -168,76 +164,10 @@ class LammpsBackend:
             between()
 
     # -- interface data ----------------------------------------------------------------------
-    def prescribe(self, ids: np.ndarray, dofs: str = "xyz") -> None:
-        ids = np.asarray(ids, int)
-        self._setup_needed = True
-        if dofs != "xyz":  # only these components are driven (e.g. a symmetry plane)
-            k = len({tuple(v) for v in self._partial.values()}) + len(self._partial)
-            self._group(f"part{k}", ids)
-            comps = " ".join("0.0" if c in dofs else "NULL" for c in "xyz")
-            self._cmd(f"fix part{k} part{k} setforce {comps}")
-            for i in ids.tolist():
-                self._partial[i] = ["xyz".index(c) for c in dofs]
-            return
-        if len(self.prescribed):
-            raise NotImplementedError("lammps adapter: one fully prescribed set (the interface) per scene")
-        self.prescribed = ids
-        self._group("iface", ids)
-        self._cmd("fix hold iface setforce 0 0 0")
-
-    def set_velocities(self, ids: np.ndarray, v: np.ndarray) -> None:
-        ids, v = np.asarray(ids, int), np.asarray(v, float)
-        for row, i in enumerate(ids.tolist()):
-            comps = self._partial.get(i)
-            if comps is None:
-                self.V[i] = v[row]
-            else:
-                self.V[i, comps] = v[row, comps]
-
-    def add_forces(self, ids: np.ndarray, F: np.ndarray) -> None:
-        """Forces F (k, 3) N added to particles ``ids`` at this step (call from the hook)."""
-        ids, F = np.asarray(ids, int), np.asarray(F, float).reshape(-1, 3)
-        np.add.at(self._added, ids, F)
-        held = np.isin(ids, self.prescribed)
-        free, Ff = ids[~held], F[~held].copy()
-        if self.scene.plane:
-            Ff[:, 2] = 0.0
-        for i in set(free.tolist()) & self._partial.keys():
-            Ff[np.ix_(free == i, self._partial[i])] = 0.0  # driven components take no force
-        np.add.at(self.F, free, Ff)
-        np.add.at(self.V, free, 0.5 * self.dt * Ff / self.mass[free, None])
-
-    def forces(self, ids: np.ndarray) -> np.ndarray:
-        """(k, 3) N: the engine's force before any setforce, plus what was added this step."""
-        ids = np.asarray(ids, int)
-        return self._store[ids] + self._added[ids]
-
-    def positions_of(self, ids: np.ndarray) -> np.ndarray:
-        return self.X[np.asarray(ids, int)].copy()
-
-    def positions(self) -> np.ndarray:
-        return self.X.copy()
-
-    def velocities(self) -> np.ndarray:
-        """Leapfrog half-step velocities v_{k-1/2} = v_k - dt/2 f_k / m (held particles: as written)."""
-        v = self.V - 0.5 * self.dt * self.F / self.mass[:, None]
-        v[self.prescribed] = self.V[self.prescribed]
-        return v
-
     def energies(self) -> dict[str, float]:
-        m = self.mass.copy()
-        m[self.prescribed] = 0.0
-        m[self.scene.groups.get("fixed", np.zeros(0, int))] = 0.0
-        V = self.V.copy()
-        for i, comps in self._partial.items():
-            V[i, comps] = 0.0
-        kinetic = 0.5 * float(np.einsum("n,ni,ni->", m, V, V))
-        elastic = 0.0
-        if len(self.scene.bonds):
-            i, j = self.scene.bonds.T
-            r = np.linalg.norm(self.X[i] - self.X[j], axis=1)
-            elastic = float(np.sum(self._bond_K * (r - self._bond_r0) ** 2))
-        return {"kinetic": kinetic, "elastic": elastic, "dissipated": 0.0}
+        m, V = self._free_mass_velocity()
+        return {"kinetic": 0.5 * float(np.einsum("n,ni,ni->", m, V, V)), "elastic": self._bond_energy(),
+                "dissipated": 0.0}
 
     def bond_state(self) -> dict:
         return {"intact": len(self.scene.bonds), "broken": 0, "broken_list": []}

@@ -40,11 +40,12 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..scene import DemScene
+from .lammps_family import VerletArrays
 
 LIB = "libliggghts.so.3"
 
 
-class LiggghtsBackend:
+class LiggghtsBackend(VerletArrays):
     """DEM back-end on one LIGGGHTS instance (several may live in one process)."""
 
     name = "liggghts"
@@ -160,11 +161,6 @@ class LiggghtsBackend:
         p = ctypes.cast(self.lib.lammps_extract_atom(self.h, name.encode()), ctypes.POINTER(ctypes.POINTER(ctypes.c_double)))
         return np.ctypeslib.as_array(p[0], shape=(self.scene.n, cols))
 
-    def _group(self, name: str, ids: np.ndarray) -> None:
-        ids = np.asarray(ids, int) + 1
-        for chunk in np.array_split(ids, max(1, len(ids) // 500)):  # keep command lines short
-            self._cmd(f"group {name} id {' '.join(map(str, chunk.tolist()))}")
-
     def critical_dt(self) -> float:
         return self.scene.critical_dt()
 
@@ -224,85 +220,18 @@ class LiggghtsBackend:
         self._fd_prev = f_d
 
     # -- interface data ----------------------------------------------------------------------
-    def prescribe(self, ids: np.ndarray, dofs: str = "xyz") -> None:
-        ids = np.asarray(ids, int)
-        self._setup_needed = True
-        if dofs != "xyz":  # only these components are driven (e.g. a symmetry plane)
-            k = len(self._partial)
-            self._group(f"part{k}", ids)
-            comps = " ".join("0.0" if c in dofs else "NULL" for c in "xyz")
-            self._cmd(f"fix part{k} part{k} setforce {comps}")
-            for i in ids.tolist():
-                self._partial[i] = ["xyz".index(c) for c in dofs]
-            return
-        if len(self.prescribed):
-            raise NotImplementedError("liggghts adapter: one fully prescribed set (the interface) per scene")
-        self.prescribed = ids
-        self._group("iface", self.prescribed)
-        self._cmd("fix hold iface setforce 0 0 0")
-
     def _refresh_store(self) -> None:
         """View of the store/force fix's per-atom array (allocated by the first run)."""
         p = ctypes.cast(self.lib.lammps_extract_fix(self.h, b"sf", 1, 2, 0, 0),
                         ctypes.POINTER(ctypes.POINTER(ctypes.c_double)))
         self._store = np.ctypeslib.as_array(p[0], shape=(self.scene.n, 3))
 
-    def set_velocities(self, ids: np.ndarray, v: np.ndarray) -> None:
-        ids, v = np.asarray(ids, int), np.asarray(v, float)
-        if self._partial and np.isin(ids, list(self._partial)).any():
-            for row, i in enumerate(ids.tolist()):
-                comps = self._partial.get(i)
-                if comps is None:
-                    self.V[i] = v[row]
-                else:
-                    self.V[i, comps] = v[row, comps]
-            return
-        self.V[ids] = v
-
-    def add_forces(self, ids: np.ndarray, F: np.ndarray) -> None:
-        """Forces F (k, 3) N added to particles ``ids`` at this step (call from the hook)."""
-        ids, F = np.asarray(ids, int), np.asarray(F, float).reshape(-1, 3)
-        np.add.at(self._added, ids, F)
-        held = np.isin(ids, self.prescribed)
-        free, Ff = ids[~held], F[~held]
-        if self.scene.plane:
-            Ff = Ff * [1.0, 1.0, 0.0]
-        for i, comps in ((i, self._partial[i]) for i in set(free.tolist()) & self._partial.keys()):
-            Ff[free == i, comps] = 0.0  # driven components take no force (as setforce)
-        np.add.at(self.F, free, Ff)
-        np.add.at(self.V, free, 0.5 * self.dt * Ff / self.mass[free, None])
-
-    def forces(self, ids: np.ndarray) -> np.ndarray:
-        """(k, 3) N: the engine's force before any setforce, plus what was added this step."""
-        ids = np.asarray(ids, int)
-        return self._store[ids] + self._added[ids]
-
-    def positions_of(self, ids: np.ndarray) -> np.ndarray:
-        return self.X[np.asarray(ids, int)].copy()
-
-    def positions(self) -> np.ndarray:
-        return self.X.copy()
-
-    def velocities(self) -> np.ndarray:
-        """Leapfrog half-step velocities v_{k-1/2} = v_k - dt/2 f_k / m (held particles: as written)."""
-        v = self.V - 0.5 * self.dt * self.F / self.mass[:, None]
-        v[self.prescribed] = self.V[self.prescribed]
-        return v
-
     def energies(self) -> dict[str, float]:
-        m = self.mass.copy()
-        m[self.prescribed] = 0.0
-        m[self.scene.groups.get("fixed", np.zeros(0, int))] = 0.0
+        m, V = self._free_mass_velocity()
         I = 0.4 * m * self.scene.radius**2
-        V = self.V.copy()
-        for i, comps in self._partial.items():
-            V[i, comps] = 0.0
         kinetic = 0.5 * float(np.einsum("n,ni,ni->", m, V, V) + np.einsum("n,ni,ni->", I, self.W, self.W))
-        elastic = 0.0
         if len(self.scene.bonds):
-            i, j = self.scene.bonds.T
-            r = np.linalg.norm(self.X[i] - self.X[j], axis=1)
-            elastic = float(np.sum(self._bond_K * (r - self._bond_r0) ** 2))
+            elastic = self._bond_energy()
         else:  # Hertz contacts: (8/15) E* sqrt(R*) delta^(5/2) per touching pair
             elastic = self._hertz()[2]
         return {"kinetic": kinetic, "elastic": elastic, "dissipated": self._dissipated}
