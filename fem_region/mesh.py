@@ -41,10 +41,11 @@ def rectangle(xs: np.ndarray, ys: np.ndarray, element: str = "quad4") -> skfem.M
 
 
 def cut_rectangle(xs: np.ndarray, ys: np.ndarray, keep, crack_y: float | None = None,
-                  crack_x_max: float = -np.inf) -> skfem.Mesh:
+                  crack_x_max: float = -np.inf, crack_x_min: float = -np.inf) -> skfem.Mesh:
     """Quad4 mesh on the lines xs, ys (m) with holes and a crack: cells whose centre (xc, yc)
-    fails ``keep(xc, yc)`` are left out; nodes on the line y = crack_y with x <= crack_x_max
-    are doubled so the cells above and below the line do not share them (a traction-free crack)."""
+    fails ``keep(xc, yc)`` are left out; nodes on the line y = crack_y with crack_x_min < x <=
+    crack_x_max are doubled so the cells above and below the line do not share them (a
+    traction-free crack; its tip nodes at crack_x_min stay shared)."""
     xs, ys = np.asarray(xs, float), np.asarray(ys, float)
     m = rectangle(xs, ys, "quad4")
     p, t = m.p.copy(), m.t.copy()
@@ -52,7 +53,8 @@ def cut_rectangle(xs: np.ndarray, ys: np.ndarray, keep, crack_y: float | None = 
     t = t[:, np.array([bool(keep(cx, cy)) for cx, cy in centre.T])]
     if crack_y is not None:
         tol = 1e-9 * (np.ptp(xs) + np.ptp(ys))
-        on = np.flatnonzero((np.abs(p[1] - crack_y) < tol) & (p[0] <= crack_x_max + tol))
+        on = np.flatnonzero((np.abs(p[1] - crack_y) < tol) & (p[0] <= crack_x_max + tol)
+                            & (p[0] > crack_x_min + tol))
         twin = np.arange(p.shape[1])
         twin[on] = p.shape[1] + np.arange(on.size)
         p = np.hstack([p, p[:, on]])
