@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import datetime as dt
 import platform
+import resource
 import sys
 import time
 from pathlib import Path
@@ -71,10 +72,18 @@ def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool,
         "clock": {**(sim.clock_info if sim else {}), "steps": result["steps"],
                   "t_end": result["steps"] * sim.dt if sim else 0.0},
         "timing_s": dict(result["timing_s"], total=time.perf_counter() - t_start),
+        "memory_peak_mb": _memory_peak_mb(),
         "energy": result["energy"], "qoi": qoi, "checks": checks, "status": status, "message": message,
     }
     final = writer.finish(summary, result["history"], keep_checkpoint=status != "ok")
     return {"ok": 0, "unstable": 3, "error": 1}[status], final, summary
+
+
+def _memory_peak_mb() -> dict[str, float]:
+    """Peak resident memory (MB) of this process (since it started: in one CLI call, the run)
+    and of its finished children (engine worker processes)."""
+    kb = lambda who: resource.getrusage(who).ru_maxrss / 1024.0  # Linux reports KiB
+    return {"orchestrator": kb(resource.RUSAGE_SELF), "workers": kb(resource.RUSAGE_CHILDREN)}
 
 
 def writer_cleanup(writer: RunOutput) -> None:

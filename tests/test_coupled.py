@@ -21,6 +21,7 @@ def test_chain_consistency_matches_monolithic(femdem, sets):
     assert s["qoi"]["max_displacement"] > 0  # the pulse really crossed into the DEM part
     assert s["energy"]["balance_error_rel"] < 0.02
     assert set(s["timing_s"]) >= {"fem", "dem", "interface", "io", "orchestrator", "total"}
+    assert s["memory_peak_mb"]["orchestrator"] > 10  # the interpreter alone takes more
 
 
 def test_engine_without_its_environment_is_refused_clearly(femdem, monkeypatch):

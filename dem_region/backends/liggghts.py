@@ -82,10 +82,12 @@ class LiggghtsBackend(VerletArrays):
         self.tmp = Path(tempfile.mkdtemp(prefix="femdem-liggghts-"))
         # LIGGGHTS ends the process on an input error: its log (in the scene's temp dir, or on
         # screen with FEMDEM_LIGGGHTS_SCREEN=1) is where the reason is
-        screen = b"stdout" if os.environ.get("FEMDEM_LIGGGHTS_SCREEN") else b"none"
-        args = (ctypes.c_char_p * 5)(b"liggghts", b"-log", str(self.tmp / "log.liggghts").encode(), b"-screen", screen)
+        argv = [b"liggghts", b"-log", str(self.tmp / "log.liggghts").encode()]
+        if not os.environ.get("FEMDEM_LIGGGHTS_SCREEN"):  # (a -screen file name would be a file)
+            argv += [b"-screen", b"none"]
+        args = (ctypes.c_char_p * len(argv))(*argv)
         self.h = ctypes.c_void_p()
-        self.lib.lammps_open_no_mpi(5, args, ctypes.byref(self.h))
+        self.lib.lammps_open_no_mpi(len(argv), args, ctypes.byref(self.h))
         n = scene.n
         i, j = scene.bonds.T if len(scene.bonds) else (np.zeros(0, int),) * 2
         r0 = np.linalg.norm(scene.x[i] - scene.x[j], axis=1)
