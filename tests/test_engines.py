@@ -120,3 +120,27 @@ def test_compare_engines(tmp_path, capsys):
 def test_compare_needs_two_engines(femdem):
     code, _, err = femdem("compare", "chain_consistency", "--dem", "yade")
     assert code == 2 and "two or more" in err
+
+
+@pytest.mark.parametrize("engine", ["yade", "liggghts"])
+def test_fixed_particles_stay_put_under_added_forces(engine):
+    """A clamp (group "fixed") does not move when the coupling layer adds forces to it (the
+    LAMMPS-family adapters write forces after the engine's setforce: they must skip clamps)."""
+    import numpy as np
+    from dem_region.backends import make_backend
+    from dem_region.scene import DemScene
+    x = np.array([[0.0, 0.0, 0.0], [1e-3, 0.0, 0.0]])
+    scene = DemScene(x, 0.5e-3, 2000.0, np.array([[0, 1]]), kn=1e3, ks=0.0, groups={"fixed": np.array([0])})
+    be = make_backend(engine, "in-process")
+    try:
+        be.build(scene)
+        be.set_dt(1e-6)
+        hook = lambda: be.add_forces(np.array([0, 1]), np.array([[5.0, 3.0, 0.0], [1.0, 0.0, 0.0]]))
+        be.start(hook)
+        for _ in range(20):
+            be.advance(hook)
+        p = be.positions()
+        assert np.array_equal(p[0], x[0])
+        assert p[1, 0] > x[1, 0]  # the free particle did take its force
+    finally:
+        be.finalize()

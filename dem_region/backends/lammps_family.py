@@ -53,7 +53,8 @@ class VerletArrays:
         """Forces F (k, 3) N added to particles ``ids`` at this step (call from the hook)."""
         ids, F = np.asarray(ids, int), np.asarray(F, float).reshape(-1, 3)
         np.add.at(self._added, ids, F)
-        held = np.isin(ids, self.prescribed)
+        # held: the interface (written velocities) and the fixed group (clamps) take no motion
+        held = np.isin(ids, self.prescribed) | np.isin(ids, self.scene.groups.get("fixed", np.zeros(0, int)))
         free, Ff = ids[~held], F[~held].copy()
         if self.scene.plane:
             Ff[:, 2] = 0.0

@@ -115,7 +115,7 @@ class LiggghtsBackend(VerletArrays):
             hard_particles yes
             atom_style hybrid granular molecular
             atom_modify map array sort 0 0
-            boundary f f f
+            boundary m m m
             newton off
             communicate single vel yes
             read_data {self.tmp / 'scene.data'}
