@@ -20,7 +20,7 @@ class ParticleImpactor:
     """impactor: a 3D RigidImpactor (sphere: a cylinder's section in a plane scene) whose radius
     is the contact radius for particle centres (impactor radius + particle radius);
     candidates: (k,) ids of the particles it may touch; fixed: (3,) bool, DOFs held at zero
-    velocity; mass_scale: reported energies and momentum are multiplied by it (slice -> width)."""
+    velocity."""
 
     def __init__(self, impactor: RigidImpactor, candidates: np.ndarray, fixed=(False, False, False)):
         self.imp = impactor

@@ -216,7 +216,7 @@ def particle_zone(p: dict, x_end: float, clamp_last: bool):
     return lat, scene, intra, inter, impactor
 
 
-def _damage_probes(p, lat, intra, inter, scale_len: float):
+def _damage_probes(p, lat, intra, inter):
     angles, _ = blocks(p)
     ply_angle = np.array(angles)[lat.ply]
     in_90 = (ply_angle[lat.intra_pairs] == 90).all(axis=1)
@@ -271,7 +271,7 @@ def build(p: dict, mode: str, dem: str):
         "contact_force": lambda: float(impactor.force[1] * width_factor),
         "impactor_velocity": lambda: float(impactor.imp.v[1]),
         "model_size": lambda: float(fem_count[0] + lat.n),  # elements + particles
-        **_damage_probes(p, lat, intra, inter, t),
+        **_damage_probes(p, lat, intra, inter),
     })
     sim.counts.update({"law_bonds": len(intra.pairs) + len(inter.pairs)})
     for t_snap in (0.1e-3, 0.6e-3):

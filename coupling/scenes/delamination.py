@@ -87,7 +87,6 @@ class Specimen:
     """What a split-beam scene needs: the FEM factory, the DEM scene, the law bonds and the
     node sets (flat x / y DOF indices) for supports and loads."""
 
-    make_fem: object
     scene: DemScene
     bonds: LawBonds
     t: float  # slice thickness, m
@@ -185,7 +184,7 @@ def build_specimen(p: dict, a0: float, x_a: float, x_b: float, omega_arm: float,
     above = np.zeros(region.n_nodes, bool)
     above[np.unique(cells_above)] = True
     end = region.X[:, 0] < tol
-    return Specimen(make_fem=None, scene=scene, bonds=bonds, t=t, width_factor=p["geometry.width"] / t,
+    return Specimen(scene=scene, bonds=bonds, t=t, width_factor=p["geometry.width"] / t,
                     region=region, upper_end=np.flatnonzero(end & above), lower_end=np.flatnonzero(end & ~above),
                     omega_arm=omega_arm)
 
@@ -217,6 +216,24 @@ def peak_before_growth(P: np.ndarray, tip: np.ndarray, a0: float, run: float) ->
     grown = np.flatnonzero(np.nan_to_num(tip, nan=-np.inf) > a0 + run)
     end = grown[0] if grown.size else len(P)
     return int(np.argmax(P[: max(end, 1)]))
+
+
+def initial_compliance(P: np.ndarray, delta: np.ndarray, k: int, upto: float) -> float:
+    """m/N, slope of displacement against load from 10 % to ``upto`` of the peak P[k], before it."""
+    early = (P > 0.1 * P[k]) & (P < upto * P[k]) & (np.arange(len(P)) < k)
+    return float(np.polyfit(P[early], delta[early], 1)[0]) if early.sum() > 3 else float("nan")
+
+
+def growth_and_dissipation(p: dict, tip: np.ndarray, D: np.ndarray, after: np.ndarray, Gc: float) -> tuple[float, float]:
+    """(crack growth m, dissipated energy per new crack area / Gc): the slope of the interface's
+    dissipation against the debonded area b x tip over the samples ``after`` (bool) where the
+    crack has run more than 8 particle radii (the process zone has formed)."""
+    a0 = p["geometry.crack_length"]
+    growth = float(np.nanmax(tip) - a0) if np.isfinite(tip).any() else 0.0
+    grow = after & np.isfinite(tip) & (tip > a0 + 8 * p["particle.radius"])
+    if grow.sum() > 3 and np.ptp(tip[grow]) > 0:
+        return growth, float(np.polyfit(p["geometry.width"] * tip[grow], D[grow], 1)[0] / Gc)
+    return growth, float("nan")
 
 
 def damping_alpha(p: dict, omega: float) -> float:

@@ -58,13 +58,8 @@ def evaluate(p: dict, h: dict, mode: str):
     k = dl.peak_before_growth(P, tip, a0, 1e-3)
     Z0, R0 = dl.resolved_strengths(p, 2 * p["particle.radius"])
     qoi = {"Z0_used": Z0, "R0_used": R0, "peak_load": float(P[k]), "deflection_at_peak": float(delta[k]), "mode_ratio_GII_G": cf["B"]}
-    early = (P > 0.1 * P[k]) & (P < 0.5 * P[k]) & (np.arange(len(P)) < k)
-    qoi["initial_compliance"] = float(np.polyfit(P[early], delta[early], 1)[0]) if early.sum() > 3 else float("nan")
-    qoi["crack_growth"] = float(np.nanmax(tip) - a0) if np.isfinite(tip).any() else 0.0
-    grow = (np.arange(len(P)) > k) & np.isfinite(tip) & (tip > a0 + 8 * p["particle.radius"])
-    ratio = float("nan")
-    if grow.sum() > 3 and np.ptp(tip[grow]) > 0:
-        ratio = float(np.polyfit(p["geometry.width"] * tip[grow], D[grow], 1)[0] / cf["Gc"])
+    qoi["initial_compliance"] = dl.initial_compliance(P, delta, k, 0.5)
+    qoi["crack_growth"], ratio = dl.growth_and_dissipation(p, tip, D, np.arange(len(P)) > k, cf["Gc"])
     qoi["dissipated_energy_ratio"] = ratio
     src = (f"beam theory, Williams partition (G_II/G = {cf['B']:.3f}) with crack corrections, "
            f"{p['interface.mixed_mode']} Gc = {cf['Gc']:.0f} J/m^2")

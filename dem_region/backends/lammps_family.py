@@ -15,6 +15,20 @@ import numpy as np
 
 
 class VerletArrays:
+    hertz_scenes = True  # the adapter builds Hertz contact scenes
+
+    def _unsupported(self, scene) -> str | None:
+        """What of ``scene`` this adapter cannot build (refused as bad input), or None."""
+        if scene.contact != "linear" and not self.hertz_scenes:
+            return "Hertz contact scenes"
+        if np.isfinite(scene.bond_strength).any():
+            return "native bond breakage"
+        if scene.local_damping:
+            return "Cundall damping (virtual calibration tests)"
+        if scene.walls:
+            return "walls"
+        return None
+
     def _group(self, name: str, ids: np.ndarray) -> None:
         ids = np.asarray(ids, int) + 1
         for chunk in np.array_split(ids, max(1, len(ids) // 500)):  # keep command lines short

@@ -65,15 +65,6 @@ class LiggghtsBackend(VerletArrays):
         for line in text.strip().splitlines():
             self.lib.lammps_command(self.h, line.strip().encode())
 
-    def _unsupported(self, scene: DemScene) -> str | None:
-        if np.isfinite(scene.bond_strength).any():
-            return "bond breakage"
-        if scene.local_damping:
-            return "Cundall damping (virtual calibration tests)"
-        if scene.walls:
-            return "walls"
-        return None
-
     def build(self, scene: DemScene) -> None:
         missing = self._unsupported(scene)
         if missing:
