@@ -127,13 +127,6 @@ class LammpsBackend(VerletArrays):
         self.X, self.V, self.F = (np.asarray(self.lmp.numpy.extract_atom(k))[:n] for k in ("x", "v", "f"))
         self._store = np.asarray(self.lmp.numpy.extract_fix("sf", 1, 2))[:n]
 
-    def critical_dt(self) -> float:
-        return self.scene.critical_dt()
-
-    def set_dt(self, dt: float) -> None:
-        self.dt = float(dt)
-        self._cmd(f"timestep {self.dt:.17g}")
-
     # -- stepping ----------------------------------------------------------------------------
     def start(self, between: Callable[[], None] | None = None) -> None:
         self._cmd("run 0 post no")

@@ -17,6 +17,13 @@ import numpy as np
 class VerletArrays:
     hertz_scenes = True  # the adapter builds Hertz contact scenes
 
+    def critical_dt(self) -> float:
+        return self.scene.critical_dt()
+
+    def set_dt(self, dt: float) -> None:
+        self.dt = float(dt)
+        self._cmd(f"timestep {self.dt:.17g}")
+
     def _unsupported(self, scene) -> str | None:
         """What of ``scene`` this adapter cannot build (refused as bad input), or None."""
         if scene.contact != "linear" and not self.hertz_scenes:

@@ -154,13 +154,6 @@ class LiggghtsBackend(VerletArrays):
         p = ctypes.cast(self.lib.lammps_extract_atom(self.h, name.encode()), ctypes.POINTER(ctypes.POINTER(ctypes.c_double)))
         return np.ctypeslib.as_array(p[0], shape=(self.scene.n, cols))
 
-    def critical_dt(self) -> float:
-        return self.scene.critical_dt()
-
-    def set_dt(self, dt: float) -> None:
-        self.dt = float(dt)
-        self._cmd(f"timestep {self.dt:.17g}")
-
     # -- stepping ----------------------------------------------------------------------------
     def start(self, between: Callable[[], None] | None = None) -> None:
         self._cmd("run 0")
