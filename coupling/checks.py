@@ -19,3 +19,10 @@ def bound(value: float, limit: float, source: str, upper: bool = True) -> dict:
     ok = value <= limit if upper else value >= limit
     return {"value": float(value), "reference": float(limit), "rel_err": None, "tol": float(limit),
             "passed": bool(ok), "source": source}
+
+
+def within(value: float, low: float, high: float, source: str) -> dict:
+    """Range check low <= value <= high (an observed band; a non-finite value fails)."""
+    ok = math.isfinite(value) and low <= value <= high
+    return {"value": float(value) if math.isfinite(value) else None, "reference": [float(low), float(high)],
+            "rel_err": None, "tol": float(high - low), "passed": bool(ok), "source": source}

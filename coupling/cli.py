@@ -114,9 +114,13 @@ def _report(s: dict, out) -> None:
     if s["message"]:
         print(f"  {s['message']}")
     for name, c in s["checks"].items():
-        err = f"rel_err {c['rel_err']:.2e}" if c["rel_err"] is not None else f"limit {c['tol']:g}"
+        ref = c["reference"]
+        ranged = isinstance(ref, list)
+        err = (f"rel_err {c['rel_err']:.2e}" if c["rel_err"] is not None else "range" if ranged
+               else f"limit {c['tol']:g}")
         value = "n/a" if c["value"] is None else f"{c['value']:.6g}"
-        print(f"  check {name}: {value} vs {c['reference']:.6g} ({err}, "
+        ref = f"[{ref[0]:.6g}, {ref[1]:.6g}]" if ranged else f"{ref:.6g}"
+        print(f"  check {name}: {value} vs {ref} ({err}, "
               f"{'PASS' if c['passed'] else 'FAIL'}; {c['source']})")
     print(f"  results: {out}/summary.json")
     plots = sorted((out / "plots").glob("*.png"))

@@ -122,7 +122,7 @@ class CoupledClock:
         total = lambda key: sum(x[key] for x in e)
         self.snapshot = {"kinetic": kin_fem + d["kinetic"] + total("kinetic"),
                          "internal": f["internal"] + d["elastic"] + self.tie.energy() + total("internal"),
-                         "external_work": f["external_work"],
+                         "external_work": f["external_work"] + sum(x.get("external_work", 0.0) for x in e),
                          "dissipated": f["dissipated"] + d["dissipated"] + total("dissipated")}
         self.interface_work_snapshot = self.interface_work
 

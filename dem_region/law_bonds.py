@@ -110,7 +110,7 @@ class LawBonds:
             self._grad = self._h_over_span * (un[self._b] - un[self._a])
             delta = delta + self._grad[:, None] * self._e_t
         if hasattr(self.law, "initiate"):
-            self.law.initiate(self.bond_stress(), np.einsum("bi,bi->b", delta, self.normal))
+            self.law.initiate(self.bond_stress(), np.einsum("bi,bi->b", delta, self.normal), self.normal)
         t, d = self.law.tractions_fast(delta, self.normal, self.damage)
         failed = d >= 1.0
         if self.friction > 0 and failed.any() and dt > 0:  # closed crack faces slide with friction
@@ -141,6 +141,23 @@ class LawBonds:
                 np.add.at(f, self._loc[nb_, 1], g)
         loaded = np.flatnonzero(np.any(f != 0.0, axis=1))  # open, failed bonds carry nothing
         backend.add_forces(self.ids[loaded], f[loaded])
+
+    def softened(self) -> np.ndarray:
+        """(nb,) share of each bond's softening branch travelled (0: elastic or not initiated,
+        1: traction-free), i.e. the share of its fracture energy spent. The damage variable
+        d = mf (m - m0) / (m (mf - m0)) of the bilinear laws is near 1 long before the traction
+        is gone when mf >> m0 (concrete and adhesives: mf / m0 ~ 300), so crack pictures and
+        crack measures use this."""
+        if hasattr(self.law, "m0"):
+            m0, mf = self.law.m0, self.law.mf
+        else:
+            dn, ds = self.split(self.delta)
+            m0, mf, _ = self.law.onset_and_final(dn, np.linalg.norm(ds, axis=1))
+        d = np.clip(self.damage, 0.0, 1.0)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            m = mf * m0 / (mf - d * (mf - m0))
+            s = np.nan_to_num((m - m0) / (mf - m0), nan=1.0, posinf=1.0)
+        return np.where(d > 0, np.clip(s, 0.0, 1.0), 0.0)
 
     def bond_stress(self) -> np.ndarray:
         """(nb, 6) Voigt Pa: mean of the two end particles' Love-Weber stresses,

@@ -178,8 +178,13 @@ class PlyBondLaw:
         self.crushed = np.zeros(nb, bool)
         self.snapback = 0
 
-    def initiate(self, stress: np.ndarray, dn: np.ndarray) -> None:
-        """stress: (nb, 6) Voigt global Pa at each bond; dn: (nb,) current openings m."""
+    def initiate(self, stress: np.ndarray, dn: np.ndarray, normal: np.ndarray | None = None) -> None:
+        """stress: (nb, 6) Voigt global Pa at each bond; dn: (nb,) current openings m;
+        normal: (nb, 3) unit bond axes. With the axes, only bonds that cross the crack plane
+        (normal to the largest principal stress, within 45 degrees of it) start softening:
+        a bond along the crack keeps its stiffness (else a vertical bond with a tiny Poisson
+        opening would soften from a near-zero peak, i.e. lose its stiffness, all over a
+        tension zone)."""
         from .kernels import hoffman_ply
         k = self.strengths
         self.index = hoffman_ply(stress, self.axes, self.strength_scale,
@@ -187,6 +192,15 @@ class PlyBondLaw:
         over = (self.index >= 1.0) & (self.m0 == 0.0)
         new = over & (dn > 0)
         self.crushed |= over & (dn <= 0)
+        if normal is not None and new.any():
+            b = np.flatnonzero(new)
+            s = stress[b]
+            S = np.empty((len(b), 3, 3))
+            for (i, j), c in zip(((0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1)), range(6)):
+                S[:, i, j] = S[:, j, i] = s[:, c]
+            e1 = np.linalg.eigh(S)[1][:, :, -1]  # direction of the largest principal stress
+            crossing = np.einsum("bi,bi->b", e1, normal[b]) ** 2 >= 0.5 - 1e-9
+            new[b[~crossing]] = False
         if new.any():
             m0 = dn[new]
             Gf = np.where(np.abs(stress[new, 0]) >= np.abs(stress[new, 1]), self.Gf[new, 0], self.Gf[new, 1])

@@ -83,7 +83,7 @@ def dem_only(p: dict, scene: DemScene, dem: str, t_end_default: float,
             work = driver.work - float(np.sum(-F * v)) * dt
         e = [m.energies() for m in models]
         return {"kinetic": d["kinetic"] + sum(x["kinetic"] for x in e), "internal": d["elastic"] + sum(x["internal"] for x in e),
-                "external_work": work, "dissipated": d["dissipated"] + sum(x["dissipated"] for x in e)}
+                "external_work": work + sum(x.get("external_work", 0.0) for x in e), "dissipated": d["dissipated"] + sum(x["dissipated"] for x in e)}
 
     pts0 = scene.x
 
