@@ -25,18 +25,27 @@ Modes (the same beam, supports and load):
 - fem: all FEM, no fracture (the "without fracture" curve and the cheap bound);
 - dem: the whole half beam as particles (the expensive reference).
 
-qoi: crack_initiation_time (first concrete bond at the bottom face within one depth of
-mid-span fully cracked, i.e. traction-free: a macro crack), crack_top_time (a cracked bond
-in the top row within half a depth of mid-span), debond_initiation_time (first interface bond
-traction-free), debonded_length at the end (whole beam) as a fraction of the sheet length,
-peak mid-span displacement with fracture (this run) and without (the fem mode, run by the
-evaluation of a coupled or dem run: a few seconds), damage_at_zone_edge.
-Checks: the energy balance; before any concrete bond softens the mid-span displacement
-follows the no-fracture FEM within 5 % of its value at that time (the coupling and the
-lattice reproduce the elastic beam); and the test's observations (Jerome & Ross 1997 as
-quoted by the seed paper): crack initiation ~430 us and debond initiation ~470 us within
-25 %, the crack at the top between 460 and 750 us, the debonded length ~1/5 of the sheet
-at 750 us within a factor 2 (a scatter-band reading of a single test).
+qoi: crack_onset_time (the first concrete bond starts to soften), crack_initiation_time (a
+bond at the bottom face within one depth of mid-span opens crack.visible_opening = 0.1 mm:
+a crack one sees in a test; the traction-free opening 2 Gf / ft is 0.23 mm), crack_top_time
+(the same in the top row within half a depth of mid-span), debond_initiation_time (first
+adhesive bond traction-free), debonded length at 750 us (whole beam, as a fraction of the
+sheet), peak mid-span displacement with fracture (this run) and without (the fem mode, run
+by the evaluation of a coupled or dem run: a few seconds), damage_at_zone_edge.
+Checks: the energy balance; crack onset against the time the no-fracture FEM's bottom fibre
+at mid-span reaches the weakest bond's strength (1 - scatter) ft, within 20 %; and the test's
+observations (Jerome & Ross 1997 as quoted by the seed paper): crack initiation ~430 us and
+debond initiation ~470 us within 25 %, the crack at the top between 460 and 750 us, the
+debonded length ~1/5 of the sheet at 750 us within a factor 2 (a reading of a single test).
+
+What this model gives (measured, docs/status.md): the elastic coupled beam matches the
+all-FEM beam to 0.2 % and a static lattice solve the beam closed form to 0.8 %; cracking
+starts at ~130 us (the elastic estimate: 119 us), flexural cracks form every ~40 mm, and by
+1.8 ms the beam deflects 60 % more than without fracture; but with the paper's Gf = 0.5 N/mm
+the cracks stay below 0.1 mm until 1.8 ms (the bonded sheet bridges them while the concrete
+still carries most of ft) and the adhesive never reaches R0: the test's checks fail. With
+Gf = 0.1 N/mm (usual for this concrete) a visible crack reaches the bottom at 1.08 ms, which
+is where the seed's own 2D run has its cracks join (1.13 ms; it reports debonding from 1.27 ms).
 """
 from __future__ import annotations
 
@@ -371,6 +380,8 @@ def _build_fem(p: dict, t: float, width_share: float):
     pressure = 1.0 / (p["load.patch_width"] * p["geometry.width"])  # Pa per N of load
     curve = drop_load(p)
     load = loads.surface_traction(region, lambda x: (x[1] > H * (1 - 1e-9)) & (x[0] < a), [0.0, -pressure], curve)
+    # the facets under the patch end on a mesh line, not at its edge: scale to the exact total
+    load.amplitude = load.amplitude * (0.5 * width_share / -np.sum(load.amplitude))
     dyn = ExplicitDynamics(region, supports=[PrescribedMotion(support_dofs(region, p)), PrescribedMotion(2 * axis)],
                            loads=[load])
     mid = axis[np.argmin(X[axis, 1])]
