@@ -91,6 +91,10 @@ class ExplicitDynamics:
     bulk_viscosity: BulkViscosity | None = None
     mass_scaling_dt: float = 0.0
     impactors: list[RigidImpactor] = field(default_factory=list)
+    # forces of models between nodes (e.g. cohesive bonds joining two meshes): callables
+    # giving (n_nodes, dim) N at the current state; their energy is the models' to report
+    node_forces: list = field(default_factory=list)
+    critical_dt_extra: float = np.inf  # s, stable step those models allow
 
     def __post_init__(self):
         r = self.region
@@ -122,7 +126,7 @@ class ExplicitDynamics:
 
     def critical_dt(self) -> float:
         """Stable step (s) including the stiffness-proportional damping reduction."""
-        dt = self.region.critical_dt(self.density_scale)
+        dt = min(self.region.critical_dt(self.density_scale), self.critical_dt_extra)
         for imp in self.impactors:
             dt = min(dt, imp.critical_dt(self.m[self._surface]))
         if self.beta > 0:
@@ -175,6 +179,8 @@ class ExplicitDynamics:
         f = f_ext - f_int - f_damp
         if self.impactors:
             f += self._contact(du)
+        for model in self.node_forces:
+            f += model()[:, : self.region.dim]
         a = f / self.m[:, None]
         if self._prescribed.size:
             # the support supplies what the prescribed path needs beyond the residual force

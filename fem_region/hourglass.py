@@ -30,13 +30,15 @@ class HourglassControl:
     """Per-element hourglass data.
 
     gamma: (nel, n_modes, n_loc) -; k: (nel,) N/m stiffness coefficient; c: (nel,) kg/s
-    viscous coefficient; form: "stiffness" | "viscous" | "none".
+    viscous coefficient; form: "stiffness" | "viscous" | "none"; k_ref: (nel,) N/m, the
+    stiffness coefficient of kappa whatever the form (to measure hourglass deformation).
     """
 
     gamma: np.ndarray
     k: np.ndarray
     c: np.ndarray
     form: str
+    k_ref: np.ndarray | None = None
 
     @classmethod
     def build(cls, X_e: np.ndarray, b: np.ndarray, vol: np.ndarray, D: np.ndarray, rho: np.ndarray,
@@ -50,13 +52,13 @@ class HourglassControl:
         gamma = h[None] - np.einsum("emi,eai->ema", hx, b)
         bb = np.einsum("eai,eai->e", b, b)
         cmax = np.einsum("eii->ei", D)[:, : b.shape[2]].max(axis=1)  # largest normal stiffness
-        k = kappa * cmax * vol * bb / gamma.shape[1]
+        k = k_ref = kappa * cmax * vol * bb / gamma.shape[1]
         c = kappa * rho * np.sqrt(cmax / rho) * vol * np.sqrt(bb) / gamma.shape[1]
         if form != "stiffness":
             k = np.zeros_like(k)
         if form != "viscous":
             c = np.zeros_like(c)
-        return cls(gamma, k, c, form)
+        return cls(gamma, k, c, form, k_ref)
 
     def stiffness(self, dim: int) -> np.ndarray:
         """(nel, n_loc*dim, n_loc*dim) N/m element hourglass stiffness."""
@@ -67,6 +69,12 @@ class HourglassControl:
         """Stored hourglass energy (J) of the stiffness form at element displacements ue."""
         q = np.einsum("ema,eai->emi", self.gamma, ue)
         return 0.5 * float(np.einsum("e,emi,emi->", self.k, q, q))
+
+    def indicator(self, ue: np.ndarray) -> float:
+        """J: the energy a stiffness control of coefficient kappa would store in the present
+        hourglass deformation, for any form (with "none" or "viscous" nothing resists it)."""
+        q = np.einsum("ema,eai->emi", self.gamma, ue)
+        return 0.5 * float(np.einsum("e,emi,emi->", self.k_ref, q, q))
 
     def force(self, coef: np.ndarray, ue: np.ndarray) -> np.ndarray:
         """coef (nel,), ue: (nel, n_loc, dim) -> element forces (nel, n_loc, dim)."""

@@ -73,3 +73,31 @@ def test_cfrp_beam_impact_coupled_equals_fem_when_elastic(femdem):
         assert code == 0, err
         peaks[mode] = s["qoi"]["peak_midspan_displacement"]
     assert abs(peaks["coupled"] / peaks["fem"] - 1) < 0.03, peaks
+
+
+def test_rod_impact_coarse(femdem):
+    """Seed 5.3, the good setting on the paper-like mesh: runs to 0.4 ms, the ledger closes,
+    the peak deflection is near the bending + shear spring-mass estimate, the rod rebounds
+    (it cannot leave faster than it came: the plate and the interface only store or dissipate)."""
+    code, s, err = femdem("run", "rod_impact_coarse")
+    assert code == 0, err
+    assert_checks(s)
+    q = s["qoi"]
+    assert abs(s["clock"]["t_end"] - 0.4e-3) < 1e-12
+    assert -100.0 <= q["final_rod_velocity"] < 0.0
+    assert 0.0 <= q["debonded_area"] <= q["damaged_area"] <= 3.1416 * 0.12**2 * 1.0001
+
+
+def test_rod_impact_bad_settings_are_caught(femdem):
+    """The stability study's failure modes stop with a diagnosis, never a quiet wrong answer:
+    one-point elements without hourglass control (exit 3, hourglass deformation), a rod
+    penalty of 2e14 Pa/m at the elements' own step (exit 2, refused with the limit), a soft
+    rod penalty that lets the rod sink into the plate (exit 3, penetration)."""
+    code, s, err = femdem("run", "rod_impact_coarse", "--set=fem.integration=reduced", "--set=fem.hourglass=none",
+                          "--set=contact.penalty=2e12", "--set=interface.penalty=2e12", "--set=clock.dt=2.7e-7")
+    assert code == 3 and "hourglass deformation" in s["message"], (code, err)
+    code, s, err = femdem("run", "rod_impact_coarse", "--set=clock.dt=2.7e-7")
+    assert code == 2 and "clock.dt" in err and "allowed <=" in err and s is None
+    code, s, err = femdem("run", "rod_impact_coarse", "--set=contact.penalty=2e10", "--set=interface.penalty=2e12",
+                          "--set=clock.dt=2.7e-7")
+    assert code == 3 and "penetrates" in s["message"], (code, err)
