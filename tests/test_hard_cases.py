@@ -66,11 +66,20 @@ def test_hourglass_guard_names_the_cause():
     r = FemRegion(m, ELEMENTS["quad4"], materials.plane_strain(materials.isotropic(1e9, 0.3)), 1.0, 1.0, "reduced")
     dyn = ExplicitDynamics(r)
     x, y = r.X.T
-    dyn.state.u[:, 0] = 1e-4 * (-1.0) ** (np.round(x * 4) + np.round(y * 4))  # checkerboard: an hourglass mode
+    checker = 1e-4 * (-1.0) ** (np.round(x * 4) + np.round(y * 4))  # checkerboard: an hourglass mode
+    dyn.state.u[:, 0] = checker
+    assert not any(g() for g in fem_guards(dyn))  # the guard waits 50 steps (an impact's first steps)
+    dyn.state.step = 50
     messages = [g() for g in fem_guards(dyn)]
-    assert any(msg and "hourglass" in msg for msg in messages)
+    assert any(msg and "hourglass energy" in msg for msg in messages)
     dyn.state.u[:] = 1e-4 * r.X  # a uniform strain is not hourglassing
     assert not any(g() for g in fem_guards(dyn))
+    # without control the pattern is measured all the same (the energy a control would store)
+    free = ExplicitDynamics(FemRegion(m, ELEMENTS["quad4"], materials.plane_strain(materials.isotropic(1e9, 0.3)), 1.0,
+                                      1.0, "reduced", hourglass="none"))
+    free.state.step = 50
+    free.state.u[:, 0] = checker + 1e-6 * x  # and a little strain, so there is strain energy to compare with
+    assert any(msg and "uncontrolled" in msg for msg in (g() for g in fem_guards(free)))
 
 
 def test_resume_uses_the_last_complete_checkpoint(tmp_path):
