@@ -26,3 +26,10 @@ def within(value: float, low: float, high: float, source: str) -> dict:
     ok = math.isfinite(value) and low <= value <= high
     return {"value": float(value) if math.isfinite(value) else None, "reference": [float(low), float(high)],
             "rel_err": None, "tol": float(high - low), "passed": bool(ok), "source": source}
+
+
+def energy_balance(history: dict, limit: float = 0.02) -> dict:
+    """The ledger at the end of a run: |external work - (kinetic + internal + dissipated)|
+    relative to the largest energy, at most ``limit``."""
+    return bound(abs(float(history["balance_error_rel"][-1])), limit,
+                 "energy ledger: external work = kinetic + internal + dissipated")
