@@ -90,3 +90,20 @@ def test_unit_slips_are_caught(femdem, setting, words):
     assert code == 2 and s is None
     for w in words:
         assert w in err
+
+
+@pytest.mark.parametrize("case, args, words", [
+    ("cfrp_beam_impact_coarse", ["--set=load.file=/nonexistent/drop.csv"], ["load.file", "/nonexistent/drop.csv"]),
+    ("cfrp_beam_impact_coarse", ["--set=dem.particle_size=5e-3"], ["dem.particle_size", "whole number"]),
+    ("cfrp_beam_impact_coarse", ["--set=geometry.span=0.9"], ["geometry.span", "0.9", "allowed"]),
+    ("cfrp_beam_impact_coarse", ["--set=dem.half_width=0.5"], ["dem.half_width", "allowed"]),
+    ("rod_impact_coarse", ["--set=interface.penalty=2e10"], ["interface.penalty", "toughness"]),
+    ("rod_impact_coarse", ["--set=fem.integration=selective"], ["fem.integration", "allowed"]),
+    ("rod_impact_coarse", ["--mode", "coupled"], ["--mode coupled", "fem"]),
+])
+def test_bad_input_of_the_seed_scenes(femdem, case, args, words):
+    code, summary, err = femdem("run", case, *args)
+    assert code == 2 and summary is None, err
+    assert len(err.strip().splitlines()) == 1, err
+    for w in words:
+        assert w in err, (w, err)
