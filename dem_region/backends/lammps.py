@@ -68,7 +68,9 @@ class LammpsBackend(VerletArrays):
         types, btype = np.unique(keys, axis=0, return_inverse=True) if len(keys) else (np.zeros((0, 2)), [])
         btype = np.asarray(btype).ravel()
         span = scene.x.max(axis=0) - scene.x.min(axis=0)
-        pad = 10 * scene.radius.max() + 0.5 * span.max()
+        # per direction (the box shrink-wraps at the first run, but the neighbour bins are
+        # laid out on this box: one padding from the longest side gave 1e12 bins for a long strip)
+        pad = 10 * scene.radius.max() + 0.5 * span
         lo, hi = scene.x.min(axis=0) - pad, scene.x.max(axis=0) + pad
         lines = ["LAMMPS data (femdem)", "", f"{n} atoms", f"{len(scene.bonds)} bonds", "1 atom types",
                  f"{max(1, len(types))} bond types",
