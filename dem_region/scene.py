@@ -65,6 +65,9 @@ class DemScene:
     bond_strength: np.ndarray | float = np.inf  # (nb,) N, normal force at which a bond breaks (brittle)
     walls: list = field(default_factory=list)  # rigid planes: Wall(axis, position, sense)
     local_damping: float = 0.0  # Cundall's non-viscous damping, only for quasi-static virtual tests
+    # True when the bonds only keep the engine from adding contact between law pairs (the
+    # coupling layer's laws carry the forces): a tie must not remove them
+    placeholder_bonds: bool = False
     velocity: np.ndarray | None = None
 
     def __post_init__(self):

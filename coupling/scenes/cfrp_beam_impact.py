@@ -271,7 +271,7 @@ class Zone:
             groups["interface"] = last
         self.scene = DemScene(x, radius, mass / (4 / 3 * np.pi * radius**3), pairs, kn=np.full(len(pairs), k_ph),
                               ks=np.zeros(len(pairs)), plane=True, young=float(np.max(lat.intra_law.K)) * d,
-                              groups=groups)
+                              groups=groups, placeholder_bonds=True)
         self.models = (self.concrete, self.sheet, self.bond)
 
     def load(self, p: dict, width_share: float) -> ParticleLoad:

@@ -86,7 +86,7 @@ def engine_scene(lat: ply_lattice.PlyLattice, extra_pairs=(), **kw) -> DemScene:
     pairs = np.vstack([lat.intra_pairs, lat.inter_pairs, *(np.reshape(e, (-1, 2)) for e in extra_pairs)])
     k = 1e-9 * float(np.max(lat.intra_law.K)) * lat.d**2
     return DemScene(lat.x, lat.radius, lat.density, pairs, kn=k, ks=0.0, plane=True,
-                    young=float(np.max(lat.intra_law.K)) * lat.d, **kw)
+                    young=float(np.max(lat.intra_law.K)) * lat.d, placeholder_bonds=True, **kw)
 
 
 def strength(p: dict) -> tuple[float, float]:

@@ -95,6 +95,7 @@ class RemoteBackend:
         while True:
             msg = self._recv()
             if msg[0] == "hook":
+                self._added_here = None  # the worker's F was taken before this hook's additions
                 if between is not None:
                     between()
                 self._send(("go",))
@@ -111,7 +112,10 @@ class RemoteBackend:
 
     def forces(self, ids: np.ndarray) -> np.ndarray:
         if ids is self.ids or (len(ids) == len(self.ids) and np.array_equal(ids, self.ids)):
-            return self.F.copy()  # written by the worker in its hook
+            # written by the worker before its hook; the forces added during the hook (the
+            # coupling layer's laws on interface particles) are added here
+            added = getattr(self, "_added_here", None)
+            return self.F.copy() if added is None else self.F + added
         return np.asarray(self._call("call", "forces", np.asarray(ids).tolist())[1])
 
     def set_velocities(self, ids: np.ndarray, v: np.ndarray) -> None:
@@ -123,6 +127,14 @@ class RemoteBackend:
     def add_forces(self, ids: np.ndarray, F: np.ndarray) -> None:
         if len(ids):
             self._call("call", "add_forces", np.asarray(ids).tolist(), np.asarray(F).tolist())
+            if getattr(self, "ids", None) is not None and len(self.ids):
+                pos = {int(i): k for k, i in enumerate(self.ids)}
+                rows = [(pos[int(i)], f) for i, f in zip(ids, np.asarray(F, float).reshape(-1, 3)) if int(i) in pos]
+                if rows:
+                    if getattr(self, "_added_here", None) is None:
+                        self._added_here = np.zeros((len(self.ids), 3))
+                    for k, f in rows:
+                        self._added_here[k] += f
 
     def positions_of(self, ids: np.ndarray) -> np.ndarray:
         return np.asarray(self._call("call", "positions_of", np.asarray(ids).tolist())[1])
