@@ -70,24 +70,28 @@ def pareto(times: np.ndarray, errors: np.ndarray) -> np.ndarray:
 
 def bench(case_name: str, sweep: dict[str, list[str]], base: dict, ref_mode: str, ref_set: dict, dem: str,
           mode: str, out: Path, qoi: list[str] | None = None) -> dict:
-    """Run the sweep; qoi: names compared with the reference (default: every qoi both runs
-    report whose name does not end in _rel, since those are already error measures)."""
+    """Run the sweep; dem: one engine or several separated by commas (an axis of the sweep:
+    one curve each; the reference runs on the first); qoi: names compared with the reference
+    (default: every qoi both runs report whose name does not end in _rel, since those are
+    already error measures)."""
     out.mkdir(parents=True, exist_ok=True)
+    engines = dem.split(",")
     if mode != "fem" or ref_mode != "fem":  # import the engine once, so no run pays for it
         from dem_region.backends import make_backend
-        make_backend(dem).finalize() if dem == "yade" else None
-    ref, cached = reference(case_name, {**base, **ref_set}, ref_mode, dem, out / "reference")
+        make_backend("yade").finalize() if "yade" in engines else None
+    ref, cached = reference(case_name, {**base, **ref_set}, ref_mode, engines[0], out / "reference")
     keys = list(sweep)
     points = []
-    for combo in itertools.product(*(sweep[k] for k in keys)):
+    for engine, combo in itertools.product(engines, itertools.product(*(sweep[k] for k in keys))):
         sets = {**base, **dict(zip(keys, combo))}
         case = load_case(case_name, sets)
         name = "_".join(f"{k.split('.')[-1]}{v}" for k, v in zip(keys, combo)) or "base"
-        code, _, s = execute(case, mode, dem, out / name, quiet=True)
+        name = f"{engine}_{name}" if len(engines) > 1 else name
+        code, _, s = execute(case, mode, engine, out / name, quiet=True)
         names = qoi or [q for q in s["qoi"] if q in ref["qoi"] and not q.endswith("_rel")]
         errors = {q: abs(s["qoi"][q] - ref["qoi"][q]) / abs(ref["qoi"][q]) for q in names
                   if q in s["qoi"] and q in ref["qoi"] and ref["qoi"][q]}
-        points.append({"setting": dict(zip(keys, combo)), "status": s["status"], "wall_s": s["timing_s"]["total"],
+        points.append({"setting": dict(zip(keys, combo)), "dem": engine, "status": s["status"], "wall_s": s["timing_s"]["total"],
                        "timing_s": s["timing_s"], "qoi": s["qoi"], "rel_error": errors,
                        "max_rel_error": max(errors.values()) if errors else None})
     ok = [p for p in points if p["status"] == "ok" and p["max_rel_error"] is not None]
@@ -109,12 +113,14 @@ def _plot(result: dict, path: Path) -> None:
     import matplotlib.pyplot as plt
     ok = [p for p in result["points"] if p["status"] == "ok" and p["max_rel_error"]]
     fig, ax = plt.subplots(figsize=(6, 4))
-    if ok:
-        t = [p["wall_s"] for p in ok]
-        e = [p["max_rel_error"] for p in ok]
-        ax.loglog(t, e, "o", label=f"{result['case']} ({result['dem']})")
-        for p, ti, ei in zip(ok, t, e):
+    for engine in dict.fromkeys(p.get("dem", result["dem"]) for p in ok):  # one curve per engine
+        mine = sorted((p for p in ok if p.get("dem", result["dem"]) == engine), key=lambda p: p["wall_s"])
+        t = [p["wall_s"] for p in mine]
+        e = [p["max_rel_error"] for p in mine]
+        ax.loglog(t, e, "o-", lw=0.6, label=f"{result['case']} ({engine})")
+        for p, ti, ei in zip(mine, t, e):
             ax.annotate(",".join(f"{k.split('.')[-1]}={v}" for k, v in p["setting"].items()), (ti, ei), fontsize=7)
+    if ok:
         f = sorted((p["wall_s"], p["max_rel_error"]) for p in ok if p.get("pareto"))
         if f:
             ax.loglog(*zip(*f), "k--", lw=0.8, label="Pareto front")
@@ -133,12 +139,17 @@ def cli(args) -> int:
     out = Path(args.out or f"runs/bench-{Path(args.case).stem}")
     if out.exists() and any(out.iterdir()):
         raise CaseError(f"--out {out}: directory exists and is not empty; allowed: a new or empty directory")
+    from .case import ENGINES
+    bad = [e for e in args.dem.split(",") if e not in ENGINES]
+    if bad:
+        raise CaseError(f"--dem {args.dem}: {bad[0]} is not an engine; allowed one or more of "
+                        f"{', '.join(ENGINES)}, separated by commas")
     r = bench(args.case, sweep, base, args.reference_mode, ref_set, args.dem, args.mode, out, args.qoi or None)
     print(f"reference: --mode {r['reference']['mode']} {r['reference']['set'] or ''} "
           f"({'cached' if r['reference']['cached'] else 'run'}, {r['reference']['wall_s']:.2f} s)")
     for p in r["points"]:
         err = f"{p['max_rel_error']:.2e}" if p["max_rel_error"] is not None else "n/a"
-        print(f"  {p['setting']}: {p['status']}, {p['wall_s']:.2f} s, max rel. error {err}"
+        print(f"  {p['dem'] + ' ' if ',' in args.dem else ''}{p['setting']}: {p['status']}, {p['wall_s']:.2f} s, max rel. error {err}"
               f"{'  (Pareto)' if p.get('pareto') else ''}")
     print(f"  results: {out}/speed_error.json\n  plot:    {out}/speed_error.png")
     return 0

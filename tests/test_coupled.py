@@ -204,3 +204,9 @@ def test_bench_speed_against_error(tmp_path, monkeypatch, capsys):
     assert any(p.get("pareto") for p in r["points"]) and (tmp_path / "b1" / "speed_error.png").exists()
     assert main(args + ["--out", str(tmp_path / "b2")]) == 0
     assert json.loads((tmp_path / "b2" / "speed_error.json").read_text())["reference"]["cached"]
+    # the engine as an axis: one curve per engine, the reference on the first
+    assert main(args + ["--dem", "yade,liggghts", "--out", str(tmp_path / "b3")]) == 0
+    r = json.loads((tmp_path / "b3" / "speed_error.json").read_text())
+    assert r["reference"]["cached"] and [p["dem"] for p in r["points"]] == ["yade", "yade", "liggghts", "liggghts"]
+    assert all(p["status"] == "ok" and 0 < p["max_rel_error"] < 5e-3 for p in r["points"])
+    assert main(["bench", "chain_consistency", "--dem", "yade,fluent", "--out", str(tmp_path / "b4")]) == 2
