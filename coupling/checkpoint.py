@@ -37,7 +37,8 @@ def _read(group: h5py.Group):
 
 
 def write(run_dir: Path, state: dict, engine_save=None) -> None:
-    """Write ``state`` (and the engine's restart via engine_save(path)) as the run's checkpoint."""
+    """Write ``state`` (and the engine's own state via engine_save(directory)) as the run's
+    checkpoint."""
     run_dir = Path(run_dir)
     tmp, final, old = run_dir / "checkpoint.tmp", run_dir / "checkpoint", run_dir / "checkpoint.old"
     shutil.rmtree(tmp, ignore_errors=True)
@@ -45,7 +46,7 @@ def write(run_dir: Path, state: dict, engine_save=None) -> None:
     with h5py.File(tmp / "state.h5", "w") as h5:
         _write(h5, state)
     if engine_save is not None:
-        engine_save(tmp / "dem.yade.bz2")
+        engine_save(tmp)
     with open(tmp / "state.h5", "rb") as f:
         os.fsync(f.fileno())
     if final.exists():

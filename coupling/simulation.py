@@ -70,7 +70,7 @@ class Simulation:
     instability_hint: str = "time step above the stable limit, or a penalty too stiff"
     # extra run-time checks at each sample: each returns None or a diagnostic (region, cause)
     guards: list[Callable[[], str | None]] = field(default_factory=list)
-    # checkpoint support: () -> (state dict, engine_save(path) or None); (state, engine path) -> None
+    # checkpoint support: () -> (state dict, engine_save(directory) or None); (state, checkpoint directory) -> None
     checkpoint: Callable[[], tuple[dict, Callable | None]] | None = None
     restore: Callable[[dict, object], None] | None = None
     versions: dict[str, str] = field(default_factory=dict)
@@ -111,8 +111,7 @@ def run_clock(sim: Simulation, on_sample: Callable[[int, float], None] | None = 
     first = 1
     if resume_from is not None:
         saved = ck.read(resume_from)
-        engine = Path(resume_from) / "dem.yade.bz2"
-        sim.restore(saved["simulation"], engine if engine.exists() else None)
+        sim.restore(saved["simulation"], Path(resume_from))  # the engine's files are in the same directory
         loop = saved["loop"]
         hist = {k: list(np.asarray(loop["history"][k]).tolist()) for k in names}
         e0 = {k: float(v) for k, v in loop["e0"].items()}

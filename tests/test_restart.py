@@ -44,9 +44,13 @@ def _kill_after_checkpoint(args, out: Path, timeout=120):
     ("free_vibration", ["run.steps=40000", "output.checkpoint_every=4000", "output.history_every=100"]),
     ("coupled_vibration", ["run.steps=4000", "output.checkpoint_every=400", "clock.substeps=2",
                            "output.history_every=20"]),
+    ("coupled_vibration --dem liggghts", ["run.steps=4000", "output.checkpoint_every=400", "clock.substeps=2",
+                                          "output.history_every=20"]),
+    ("coupled_vibration --dem lammps", ["run.steps=4000", "output.checkpoint_every=400", "clock.substeps=2",
+                                        "output.history_every=20"]),
 ])
 def test_killed_run_resumes_bit_identical(tmp_path, case, sets):
-    args = ["run", case] + sum((["--set", s] for s in sets), [])
+    args = ["run", *case.split()] + sum((["--set", s] for s in sets), [])
     ref = tmp_path / "straight"
     assert _femdem(*args, "--out", str(ref), "--quiet").returncode == 0
     out = tmp_path / "killed"

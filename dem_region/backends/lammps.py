@@ -39,7 +39,6 @@ class LammpsBackend(VerletArrays):
 
     name = "lammps"
     native_laws = ("elastic",)
-    can_checkpoint = False
     hertz_scenes = False
 
     def __init__(self):
@@ -128,6 +127,14 @@ class LammpsBackend(VerletArrays):
         n = self.scene.n
         self.X, self.V, self.F = (np.asarray(self.lmp.numpy.extract_atom(k))[:n] for k in ("x", "v", "f"))
         self._store = np.asarray(self.lmp.numpy.extract_fix("sf", 1, 2))[:n]
+
+    def _state(self) -> dict[str, np.ndarray]:
+        n = self.scene.n
+        spin = {k: np.asarray(self.lmp.numpy.extract_atom(k))[:n] for k in ("omega", "torque")}
+        return {"x": self.X, "v": self.V, "f": self.F, **spin}
+
+    def _after_setup(self) -> None:
+        self._views()
 
     # -- stepping ----------------------------------------------------------------------------
     def start(self, between: Callable[[], None] | None = None) -> None:

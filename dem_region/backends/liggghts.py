@@ -50,7 +50,6 @@ class LiggghtsBackend(VerletArrays):
 
     name = "liggghts"
     native_laws = ("elastic",)
-    can_checkpoint = False
 
     def __init__(self):
         self.lib = ctypes.CDLL(LIB, ctypes.RTLD_GLOBAL)
@@ -130,6 +129,7 @@ class LiggghtsBackend(VerletArrays):
             self._cmd("fix plane all setforce NULL NULL 0.0")  # quasi-2D: no out-of-plane motion
         self.X, self.V, self.F = (self._array(k, 3) for k in ("x", "v", "f"))
         self.W = self._array("omega", 3)
+        self.T = self._array("torque", 3)
         self.ids_order = np.ctypeslib.as_array(ctypes.cast(self.lib.lammps_extract_atom(self.h, b"id"),
                                                            ctypes.POINTER(ctypes.c_int)), shape=(n,))
         if not np.array_equal(self.ids_order, np.arange(1, n + 1)):
@@ -204,6 +204,12 @@ class LiggghtsBackend(VerletArrays):
         f_d[self.scene.groups.get("fixed", np.zeros(0, int))] = 0.0
         self._dissipated -= float(np.sum(0.5 * (f_d + self._fd_prev) * (self.X - x_old)))
         self._fd_prev = f_d
+
+    def _state(self) -> dict[str, np.ndarray]:
+        return {"x": self.X, "v": self.V, "f": self.F, "omega": self.W, "torque": self.T}
+
+    def _after_setup(self) -> None:
+        self._refresh_store()
 
     # -- interface data ----------------------------------------------------------------------
     def _refresh_store(self) -> None:

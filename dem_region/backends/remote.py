@@ -30,7 +30,7 @@ class RemoteBackend:
 
     def __init__(self, engine: str, python: str | None = None, env: dict | None = None):
         self.name = engine
-        self.can_checkpoint = engine != "lammps"  # its adapter has no restart files yet
+        self.restart_file = "dem.yade.bz2" if engine == "yade" else "dem.npz"
         parent, child = socket.socketpair()
         env = dict(env if env is not None else os.environ)
         env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")

@@ -248,6 +248,8 @@ class YadeBackend:
         return {"kinetic": kinetic, "elastic": float(elastic), "dissipated": float(dissipated)}
 
     # -- checkpoint ----------------------------------------------------------------------------
+    restart_file = "dem.yade.bz2"  # YADE picks the format from the name: compressed binary
+
     def checkpoint(self, path) -> None:
         """Save the whole engine state (YADE's own format), atomically: a kill mid-write
         leaves the previous checkpoint intact."""
