@@ -37,11 +37,12 @@ def coupled_simulation(p: dict, make_fem: Callable[[np.ndarray | None], Explicit
         itf = TransitionInterface.build(fem.region, scene.x, scene.groups.get("interface", np.zeros(0, int)))
     except InterfaceError as exc:
         raise CaseError(f"interface: {exc}") from None
-    if p["interface.tie"] == "kinematic" and not scene.placeholder_bonds:
-        # the FEM carries the band's stiffness (placeholder bonds carry none and must stay:
-        # without them an engine adds contact between overlapping law pairs)
-        scene = scene.without_bonds_within(itf.ids)
-        fem.add_nodal_mass(itf.share_mass(scene.mass[itf.ids]))
+    if p["interface.tie"] == "kinematic":
+        if not scene.placeholder_bonds:
+            # the FEM carries the band's stiffness (placeholder bonds carry none and must
+            # stay: without them an engine adds contact between overlapping law pairs)
+            scene = scene.without_bonds_within(itf.ids)
+        fem.add_nodal_mass(itf.share_mass(scene.mass[itf.ids]))  # slaved particles move with the nodes
     try:  # the engine last, so a bad interface never leaves an engine or worker behind
         backend = make_backend(dem, p["dem.process"])
     except EngineUnavailable as exc:
