@@ -173,4 +173,5 @@ class CoupledClock:
     def timing_correction(self) -> dict[str, float]:
         """Move the time spent inside the hook out of the DEM bucket."""
         inner = sum(self.inner.values())
-        return {"dem": -inner, **self.inner}
+        transport = getattr(self.dem, "transport_s", 0.0)  # a worker's messages and copies
+        return {"dem": -inner - transport, **self.inner, "transport": transport}

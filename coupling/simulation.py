@@ -16,7 +16,7 @@ from typing import Callable
 import numpy as np
 
 # models: bond laws and impactors the coupling layer evaluates on the engine's particles
-TIMERS = ("fem", "dem", "interface", "models", "io", "orchestrator")
+TIMERS = ("fem", "dem", "interface", "models", "transport", "io", "orchestrator")
 
 
 class Instability(RuntimeError):

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import socket
 import sys
+import time
 from pathlib import Path
 from multiprocessing import resource_tracker, shared_memory
 from multiprocessing.connection import Connection
@@ -41,10 +42,17 @@ def serve(conn: Connection, engine: str) -> None:
     from dem_region.scene import DemScene
 
     backend = get_backend(engine)()
-    state = {"ids": np.zeros(0, int), "F": None, "V": None, "blocks": []}
+    state = {"ids": np.zeros(0, int), "F": None, "V": None, "blocks": [], "in_hook": 0.0}
 
     def between():
         """The engine's coupling hook: interface forces out, then serve queries until 'go'."""
+        t0 = time.perf_counter()
+        try:
+            _between()
+        finally:
+            state["in_hook"] += time.perf_counter() - t0
+
+    def _between():
         if state["F"] is not None:
             state["F"][:] = backend.forces(state["ids"])
         conn.send(("hook",))
@@ -75,9 +83,11 @@ def serve(conn: Connection, engine: str) -> None:
                 conn.send(("ok",))
             elif op in ("start", "advance"):
                 hook = between if args[1] else None  # the orchestrator has a hook to run
+                t0, state["in_hook"] = time.perf_counter(), 0.0
                 for _ in range(args[0] if op == "advance" else 1):
                     getattr(backend, op)(hook)
-                conn.send(("done",))
+                # the engine's own time: the orchestrator separates it from the transport
+                conn.send(("done", time.perf_counter() - t0 - state["in_hook"]))
             elif op == "call":  # bulk queries: positions, velocities, energies, forces(ids)
                 out = getattr(backend, args[0])(*args[1:])
                 # plain lists: the two processes may run different numpy versions

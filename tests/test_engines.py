@@ -175,3 +175,15 @@ def test_lammps_worker_runs_after_openmpi_was_initialised(femdem, tmp_path):
                         "--out", str(tmp_path / "lmp"), "--quiet"], capture_output=True, text=True,
                        cwd=Path(__file__).resolve().parents[1])
     assert r.returncode == 0, r.stderr[-500:]
+
+
+def test_worker_transport_is_timed_apart(femdem):
+    """summary.json books a worker's messages and copies as "transport", apart from the
+    engine's own time; an in-process engine has none."""
+    code, s, err = femdem("run", "coupled_free_flight", "--dem", "lammps")
+    assert code == 0, err
+    t = s["timing_s"]
+    assert t["transport"] > 0 and t["dem"] > 0
+    code, s, err = femdem("run", "coupled_free_flight", "--dem", "liggghts")
+    assert code == 0, err
+    assert s["timing_s"]["transport"] == 0.0

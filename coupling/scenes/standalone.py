@@ -98,5 +98,7 @@ def dem_only(p: dict, scene: DemScene, dem: str, t_end_default: float,
                 "interface_particles": 0},
         clock_info={"dt_fem": 0.0, "dt_dem": dt, "dt_stable_dem": dt_stable, "substeps": 1},
         fields=fields, field_frames=p["output.field_frames"], energy_growth_tol=p["guards.energy_growth"],
-        close=backend.finalize, versions={dem: backend.version})
+        close=backend.finalize, versions={dem: backend.version},
+        timing_correction=lambda: {"dem": -getattr(backend, "transport_s", 0.0),
+                                   "transport": getattr(backend, "transport_s", 0.0)})
     return sim, backend, driver

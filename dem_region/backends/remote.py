@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import os
 import socket
+import time
 import subprocess
 import sys
 from multiprocessing import shared_memory
@@ -31,6 +32,7 @@ class RemoteBackend:
     def __init__(self, engine: str, python: str | None = None, env: dict | None = None):
         self.name = engine
         self.restart_file = "dem.yade.bz2" if engine == "yade" else "dem.npz"
+        self.transport_s = 0.0  # s spent on the transport during start / advance
         parent, child = socket.socketpair()
         env = dict(env if env is not None else os.environ)
         env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
@@ -91,15 +93,23 @@ class RemoteBackend:
         self._call("prescribe", self.ids.tolist(), self.blocks[0].name, self.blocks[1].name)
 
     def _run(self, op: str, between: Callable[[], None] | None, n: int = 1) -> None:
+        clock = time.perf_counter
+        t0, in_hook = clock(), 0.0
         self._send((op, n, between is not None))
         while True:
             msg = self._recv()
             if msg[0] == "hook":
                 self._added_here = None  # the worker's F was taken before this hook's additions
                 if between is not None:
+                    t1 = clock()
                     between()
+                    in_hook += clock() - t1
                 self._send(("go",))
             elif msg[0] == "done":
+                # waiting minus the worker's engine time: messages, shared-memory copies, the
+                # worker's side of the hook protocol (what an in-process engine does not pay)
+                if len(msg) > 1:
+                    self.transport_s += max(0.0, clock() - t0 - in_hook - float(msg[1]))
                 return
             else:
                 raise RuntimeError(f"{self.name} worker: {msg}")
