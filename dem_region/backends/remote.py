@@ -43,6 +43,8 @@ class RemoteBackend:
         self.blocks: list[shared_memory.SharedMemory] = []
         self.ids = np.zeros(0, int)
         self.prescribed = self.ids
+        self._row = np.zeros(0, int)  # particle id -> its row in F / V, -1 if not an interface particle
+        self._added_here = None  # (len(ids), 3) N added to interface particles during this hook
 
     def _died(self) -> EngineUnavailable:
         try:
@@ -87,6 +89,8 @@ class RemoteBackend:
             self._call("call", "prescribe", np.asarray(ids).tolist(), dofs)
             return
         self.ids = self.prescribed = np.asarray(ids, int)
+        self._row = np.full(int(self.ids.max()) + 1 if len(self.ids) else 0, -1)
+        self._row[self.ids] = np.arange(len(self.ids))
         nbytes = max(8, 8 * 3 * len(self.ids))
         self.blocks = [shared_memory.SharedMemory(create=True, size=nbytes) for _ in range(2)]
         self.F, self.V = (np.ndarray((len(self.ids), 3), dtype=np.float64, buffer=b.buf) for b in self.blocks)
@@ -124,8 +128,7 @@ class RemoteBackend:
         if ids is self.ids or (len(ids) == len(self.ids) and np.array_equal(ids, self.ids)):
             # written by the worker before its hook; the forces added during the hook (the
             # coupling layer's laws on interface particles) are added here
-            added = getattr(self, "_added_here", None)
-            return self.F.copy() if added is None else self.F + added
+            return self.F.copy() if self._added_here is None else self.F + self._added_here
         return np.asarray(self._call("call", "forces", np.asarray(ids).tolist())[1])
 
     def set_velocities(self, ids: np.ndarray, v: np.ndarray) -> None:
@@ -137,14 +140,14 @@ class RemoteBackend:
     def add_forces(self, ids: np.ndarray, F: np.ndarray) -> None:
         if len(ids):
             self._call("call", "add_forces", np.asarray(ids).tolist(), np.asarray(F).tolist())
-            if getattr(self, "ids", None) is not None and len(self.ids):
-                pos = {int(i): k for k, i in enumerate(self.ids)}
-                rows = [(pos[int(i)], f) for i, f in zip(ids, np.asarray(F, float).reshape(-1, 3)) if int(i) in pos]
-                if rows:
-                    if getattr(self, "_added_here", None) is None:
-                        self._added_here = np.zeros((len(self.ids), 3))
-                    for k, f in rows:
-                        self._added_here[k] += f
+            ids = np.asarray(ids, int)
+            rows = np.where(ids < len(self._row), self._row[np.minimum(ids, len(self._row) - 1)], -1) \
+                if len(self._row) else np.full(len(ids), -1)
+            tied = rows >= 0
+            if tied.any():  # forces on interface particles: the tie reads them through forces()
+                if self._added_here is None:
+                    self._added_here = np.zeros((len(self.ids), 3))
+                np.add.at(self._added_here, rows[tied], np.asarray(F, float).reshape(-1, 3)[tied])
 
     def positions_of(self, ids: np.ndarray) -> np.ndarray:
         return np.asarray(self._call("call", "positions_of", np.asarray(ids).tolist())[1])
