@@ -49,8 +49,6 @@ is where the seed's own 2D run has its cracks join (1.13 ms; it reports debondin
 """
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
 from dem_region import ply_lattice
@@ -435,6 +433,7 @@ def evaluate(p: dict, h: dict, mode: str):
     qoi["sheet_broken_bonds"] = float(h["sheet_broken"][-1])
     qoi["damage_at_zone_edge"] = float(np.max(h["damage_at_zone_edge"]))
     ref = no_fracture_history(p)
+    # the reference curve joins the history: saved with it and drawn by plot()
     h["no_fracture.time"], h["no_fracture.midspan_displacement"] = ref["time"], ref["midspan_displacement"]
     qoi["peak_midspan_displacement_no_fracture"] = float(np.max(ref["midspan_displacement"]))
     qoi["displacement_change_by_fracture"] = qoi["peak_midspan_displacement"] / \
