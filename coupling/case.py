@@ -31,6 +31,8 @@ COMMON: dict[str, Param] = {
     "dem.process": Param("auto", "where the DEM engine runs: auto (in-process for yade/liggghts, a worker "
                          "process for lammps), in-process, or worker", kind="str",
                          choices=("auto", "in-process", "worker")),
+    "dem.ranks": Param(1, "MPI ranks of the DEM engine inside its worker (lammps only; its own mpiexec)",
+                       kind="int", low=1, high=64),
     "guards.energy_growth": Param(0.05, "stop when the energy balance error exceeds this fraction", low=0.0, open_low=True),
 }
 

@@ -57,6 +57,7 @@ class BlockResponse:
     nu: float
     peak_stress: float = float("nan")
     scale: float = 1.0
+    engine_version: str = ""
 
 
 def faces(scene, axis: int, tol: float = 0.5):
@@ -90,7 +91,7 @@ def virtual_tension(scene, engine: str = "yade", axis: int = 0, strain: float = 
 
     lo, hi = faces(scene, axis)
     test = replace(scene, local_damping=damping, velocity=np.zeros_like(scene.x), groups={})
-    eng = make_backend(engine, "in-process")
+    eng = make_backend(engine)
     try:
         eng.build(test)
         dt = 0.5 * eng.critical_dt()
@@ -133,7 +134,7 @@ def virtual_tension(scene, engine: str = "yade", axis: int = 0, strain: float = 
         h0 = scene.x[top, lat].mean() - scene.x[bot, lat].mean()
         eps_lat = (x[top, lat].mean() - x[bot, lat].mean()) / h0 - 1
         return BlockResponse(E=sigma / eps if not to_failure else float("nan"), nu=-eps_lat / eps,
-                             peak_stress=state["peak"] if to_failure else float("nan"))
+                             peak_stress=state["peak"] if to_failure else float("nan"), engine_version=eng.version)
     finally:
         eng.finalize()
 
@@ -185,7 +186,7 @@ def virtual_shear(scene, engine: str = "yade", gamma: float = 2e-4, damping: flo
     x0, x1 = x[:, 0].min(), x[:, 0].max()
     edge = (x[:, 1] < y0 + 0.5 * r) | (x[:, 1] > y1 - 0.5 * r) | (x[:, 0] < x0 + 0.5 * r) | (x[:, 0] > x1 - 0.5 * r)
     boundary, top = np.flatnonzero(edge), np.flatnonzero(x[:, 1] > y1 - 0.5 * r)
-    eng = make_backend(engine, "in-process")
+    eng = make_backend(engine)
     try:
         eng.build(replace(scene, local_damping=damping, velocity=np.zeros_like(x), groups={}))
         dt = 0.5 * eng.critical_dt()

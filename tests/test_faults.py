@@ -61,3 +61,44 @@ def test_killed_orchestrator_leaves_no_worker_or_shared_memory(tmp_path):
     assert not alive, "the worker outlived the orchestrator"
     assert set(glob.glob("/dev/shm/*")) <= shm_before, "shared memory left behind"
     assert not (tmp_path / "run").exists(), "a killed run must not look finished"
+
+
+def _descendants(pid: int) -> list[int]:
+    rows = [line.split() for line in subprocess.run(["ps", "-eo", "pid=,ppid="], capture_output=True,
+                                                     text=True).stdout.splitlines()]
+    children: dict[int, list[int]] = {}
+    for p, pp in rows:
+        children.setdefault(int(pp), []).append(int(p))
+    out, todo = [], [pid]
+    while todo:
+        for c in children.get(todo.pop(), []):
+            out.append(c)
+            todo.append(c)
+    return out
+
+
+def test_killed_orchestrator_leaves_no_lammps_rank_behind(tmp_path):
+    """LAMMPS on two ranks under its mpiexec: when the orchestrator is killed, rank 0 sees the
+    socket close, tells the other rank, both shut LAMMPS down and mpiexec exits."""
+    out = tmp_path / "run"
+    shm_before = set(glob.glob("/dev/shm/*"))
+    proc = subprocess.Popen([sys.executable, "-m", "coupling.cli", "run", "coupled_vibration", "--dem", "lammps",
+                             "--set", "dem.ranks=2", "--set", "run.steps=200000", "--quiet", "--out", str(out)],
+                            cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    t0 = time.time()
+    while time.time() - t0 < 60 and not (Path(str(out) + ".partial") / "plots").exists():
+        time.sleep(0.2)
+    time.sleep(1.0)
+    family = _descendants(proc.pid)
+    ranks = [p for p in family if "dem_region.worker" in Path(f"/proc/{p}/cmdline").read_text(errors="ignore")]
+    assert len(ranks) >= 3, "mpiexec and two ranks expected"  # mpiexec's own line names the worker too
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait()
+    t0 = time.time()
+    while time.time() - t0 < 30:
+        alive = [p for p in family if subprocess.run(["ps", "-p", str(p)], capture_output=True).returncode == 0]
+        if not alive and set(glob.glob("/dev/shm/*")) <= shm_before:
+            break
+        time.sleep(0.2)
+    assert not alive, f"processes outlived the orchestrator: {alive}"
+    assert set(glob.glob("/dev/shm/*")) <= shm_before, "shared memory left behind"

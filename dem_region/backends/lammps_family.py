@@ -10,6 +10,15 @@ Needs: X, V, F, _store, _added (n, 3); mass (n,); prescribed ids; _partial {id: 
 scene; dt; name; _cmd(text), _group(name, ids); _setup_needed; _state() (the per-atom
 arrays a checkpoint saves) and _after_setup() (refresh views after a setup run).
 
+What neither engine has natively is done here on the same arrays, as added forces (velocity
+Verlet with the force included): brittle bonds (a bond of finite ``bond_strength`` is a
+harmonic spring evaluated in numpy, the engine carries a placeholder of zero stiffness; it
+breaks when its tensile force reaches the strength, as YADE's fragile CohFrictPhys, and a
+broken pair keeps only a compression spring so it cannot interpenetrate) and Cundall's local
+non-viscous damping for the quasi-static virtual tests (f_d = -alpha |f| sign(v) per
+component on the total force, YADE's NewtonIntegrator damping). Call ``_hook_phase(between)``
+after every engine step.
+
 Checkpoints save those arrays (positions, velocities, forces, spins, torques, the stored
 forces), not the engine's restart file: a restart file does not carry the fixes, so the
 scene is rebuilt from its description on resume and the arrays are written back after a
@@ -24,7 +33,7 @@ import numpy as np
 
 
 class VerletArrays:
-    hertz_scenes = True  # the adapter builds Hertz contact scenes
+    two_sided_walls = True  # a wall of sense 0 acts on both sides
 
     def critical_dt(self) -> float:
         return self.scene.critical_dt()
@@ -35,15 +44,150 @@ class VerletArrays:
 
     def _unsupported(self, scene) -> str | None:
         """What of ``scene`` this adapter cannot build (refused as bad input), or None."""
-        if scene.contact != "linear" and not self.hertz_scenes:
-            return "Hertz contact scenes"
-        if np.isfinite(scene.bond_strength).any():
-            return "native bond breakage"
-        if scene.local_damping:
-            return "Cundall damping (virtual calibration tests)"
-        if scene.walls:
-            return "walls"
+        if not self.two_sided_walls and any(w.sense == 0 for w in scene.walls):
+            return "two-sided walls (sense 0)"
+        if scene.walls and scene.contact != "hertz_mindlin":
+            return "walls in bonded scenes"
         return None
+
+    def _to_engine(self, state: dict | None = None, names=("v", "f")) -> None:
+        """Copy arrays written here back into the engine: nothing to do for zero-copy views."""
+
+    # -- what the engines lack, on their arrays -----------------------------------------------------
+    def _engine_kn(self, scene) -> np.ndarray:
+        """(nb,) N/m, the engine's harmonic stiffness: breakable bonds are carried here (0 there)."""
+        return np.where(np.isfinite(scene.bond_strength), 0.0, scene.kn)
+
+    def _init_extras(self, scene) -> None:
+        """State of the brittle bonds and the damping; call at the end of build."""
+        self._brittle = np.flatnonzero(np.isfinite(scene.bond_strength))
+        b = scene.bonds[self._brittle]
+        self._brittle_r0 = np.linalg.norm(scene.x[b[:, 1]] - scene.x[b[:, 0]], axis=1)
+        self._brittle_alive = np.ones(len(self._brittle), bool)
+        self._broken: list[tuple] = []  # (i, j, t s, x, y, z m)
+        self._released = 0.0  # J, elastic energy of the bonds at the moment they broke
+        self._time = 0.0
+        self._damping = float(scene.local_damping)
+        # Hertz contact damping is booked here (neither engine reports it)
+        self._track_damping = not len(scene.bonds) and scene.restitution < 1.0
+        self._dissipated, self._fd_prev = 0.0, np.zeros((scene.n, 3))
+
+    def _step_begin(self) -> np.ndarray | None:
+        """Call before an engine step: clears the added forces; positions for the damping book."""
+        self._added[:] = 0.0
+        return self.X.copy() if self._track_damping else None
+
+    def _step_end(self, x_old: np.ndarray | None) -> None:
+        """Call after an engine step (before ``_hook_phase``)."""
+        self._time += self.dt
+        if x_old is not None:
+            self._book_damping(x_old)
+
+    def _hook_phase(self, between) -> None:
+        """After an engine step: brittle bond forces, the orchestrator's hook, then damping on
+        the total force."""
+        if len(self._brittle):
+            self._brittle_forces()
+        if between is not None:
+            between()
+        if self._damping:
+            self._cundall()
+
+    def _brittle_stretch(self):
+        i, j = self.scene.bonds[self._brittle].T
+        d = self.X[j] - self.X[i]
+        r = np.linalg.norm(d, axis=1)
+        return i, j, d, r, r - self._brittle_r0
+
+    def _brittle_forces(self) -> None:
+        i, j, d, r, s = self._brittle_stretch()
+        kn = self.scene.kn[self._brittle]
+        f = kn * s  # N, tension positive
+        newly = self._brittle_alive & (f >= self.scene.bond_strength[self._brittle])
+        if newly.any():
+            self._released += float(np.sum(0.5 * kn[newly] * s[newly] ** 2))
+            self._brittle_alive &= ~newly
+            mid = 0.5 * (self.X[i[newly]] + self.X[j[newly]])
+            self._broken += [(int(a), int(b), self._time, *m) for a, b, m in zip(i[newly], j[newly], mid.tolist())]
+        f = np.where(self._brittle_alive, f, np.minimum(f, 0.0))  # broken: contact in compression only
+        Fj = -(f / r)[:, None] * d
+        self.add_forces(np.concatenate([i, j]), np.concatenate([-Fj, Fj]))
+
+    def _cundall(self) -> None:
+        f_d = -self._damping * np.abs(self.F) * np.sign(self.V)
+        self.F += f_d
+        self.V += 0.5 * self.dt * f_d / self.mass[:, None]
+
+    def _brittle_energy(self) -> float:
+        """J, stored in the brittle bonds (broken ones: only while compressed)."""
+        if not len(self._brittle):
+            return 0.0
+        s = self._brittle_stretch()[4]
+        s = np.where(self._brittle_alive, s, np.minimum(s, 0.0))
+        return float(np.sum(0.5 * self.scene.kn[self._brittle] * s**2))
+
+    # -- Hertz contacts: elastic part and damping ---------------------------------------------------
+    def wall_material(self) -> tuple[float, float]:
+        """(E Pa, nu) of the rigid walls: 10^6 x the stiffest particle, as the YADE adapter."""
+        return 1e6 * float(self.scene.young.max()), float(self.scene.poisson[0])
+
+    def _hertz(self):
+        """(ids (p, 2) with -1 for a wall, elastic Hertz force on the first of each pair (p, 3),
+        energy J) of the touching unbonded pairs and particle-wall contacts (R* = R on a plane)."""
+        from scipy.spatial import cKDTree
+        R, X, E, nu = self.scene.radius, self.X, self.scene.young, self.scene.poisson
+        pairs = np.array(sorted(cKDTree(X).query_pairs(2 * R.max())), dtype=int).reshape(-1, 2)
+        a, b = pairs.T
+        d = X[a] - X[b]
+        dist = np.linalg.norm(d, axis=1)
+        delta = np.maximum(R[a] + R[b] - dist, 0.0)
+        Es = 1.0 / ((1 - nu[a] ** 2) / E[a] + (1 - nu[b] ** 2) / E[b])
+        Rs = R[a] * R[b] / (R[a] + R[b])
+        n = d / np.where(dist > 0, dist, 1.0)[:, None]
+        ids, normals, deltas, Ess, Rss = [pairs], [n], [delta], [Es], [Rs]
+        Ew, nuw = self.wall_material()
+        for w in self.scene.walls:
+            s = X[:, w.axis] - w.position
+            touch = np.flatnonzero(np.abs(s) < R)
+            nw = np.zeros((len(touch), 3))
+            nw[:, w.axis] = np.sign(s[touch])
+            ids.append(np.column_stack([touch, np.full(len(touch), -1)]))
+            normals.append(nw)
+            deltas.append(R[touch] - np.abs(s[touch]))
+            Ess.append(1.0 / ((1 - nu[touch] ** 2) / E[touch] + (1 - nuw**2) / Ew))
+            Rss.append(R[touch])
+        ids, n, delta, Es, Rs = (np.concatenate(v) for v in (ids, normals, deltas, Ess, Rss))
+        f = (4.0 / 3.0) * Es * np.sqrt(Rs) * delta**1.5
+        energy = float(np.sum((8.0 / 15.0) * Es * np.sqrt(Rs) * delta**2.5))
+        return ids.reshape(-1, 2), f[:, None] * n, energy
+
+    def _book_damping(self, x_old: np.ndarray) -> None:
+        """Work of the contact damping over the last step: total force minus the elastic Hertz
+        force, trapezoidal in time."""
+        pairs, f_el, _ = self._hertz()
+        F_el = np.zeros_like(self.X)
+        np.add.at(F_el, pairs[:, 0], f_el)
+        other = pairs[:, 1] >= 0  # walls take no force here
+        np.add.at(F_el, pairs[other, 1], -f_el[other])
+        f_d = self.F - F_el
+        f_d[self.scene.groups.get("fixed", np.zeros(0, int))] = 0.0
+        self._dissipated -= float(np.sum(0.5 * (f_d + self._fd_prev) * (self.X - x_old)))
+        self._fd_prev = f_d
+
+    def energies(self) -> dict[str, float]:
+        """{kinetic (translation + rotation of the free particles), elastic (bonds, or Hertz
+        contacts (8/15) E* sqrt(R*) delta^(5/2)), dissipated (contact damping, broken bonds)} J."""
+        m, V = self._free_mass_velocity()
+        W = self._omega()
+        I = 0.4 * m * self.scene.radius**2
+        kinetic = 0.5 * float(np.einsum("n,ni,ni->", m, V, V) + np.einsum("n,ni,ni->", I, W, W))
+        elastic = self._bond_energy() if len(self.scene.bonds) else self._hertz()[2]
+        return {"kinetic": kinetic, "elastic": elastic, "dissipated": self._dissipated + self._released}
+
+    def bond_state(self) -> dict:
+        """{intact, broken, broken_list}: rows (i, j, t s, x, y, z m) of the bonds broken so far."""
+        return {"intact": len(self.scene.bonds) - len(self._broken), "broken": len(self._broken),
+                "broken_list": list(self._broken)}
 
     # -- checkpoint ----------------------------------------------------------------------------
     restart_file = "dem.npz"
@@ -53,7 +197,8 @@ class VerletArrays:
         if self.scene.contact == "hertz_mindlin":
             raise NotImplementedError(f"{self.name} adapter: checkpoints of Hertz contact scenes (contact history)")
         tmp = f"{path}.tmp.npz"
-        np.savez(tmp, store=self._store, **self._state())
+        np.savez(tmp, store=self._store, brittle_alive=self._brittle_alive, released=self._released,
+                 time=self._time, broken=np.array(self._broken, float).reshape(-1, 6), **self._state())
         os.replace(tmp, path)
 
     def restore(self, path) -> None:
@@ -61,12 +206,19 @@ class VerletArrays:
         recomputes the forces), then the saved velocities, forces, spins and stored forces,
         so the next step starts from exactly the saved state."""
         saved = np.load(path)
-        self._state()["x"][:] = saved["x"]
+        state = self._state()
+        state["x"][:] = saved["x"]
+        self._to_engine(state, ("x",))
         self._cmd("run 0 post no")
         self._after_setup()
-        for name, view in self._state().items():
+        state = self._state()
+        for name, view in state.items():
             view[:] = saved[name]
+        self._to_engine(state, tuple(state))
         self._store[:] = saved["store"]
+        self._brittle_alive[:] = saved["brittle_alive"]
+        self._released, self._time = float(saved["released"]), float(saved["time"])
+        self._broken = [(int(a), int(b), *rest) for a, b, *rest in saved["broken"].tolist()]
         self._setup_needed = False
 
     def _group(self, name: str, ids: np.ndarray) -> None:
@@ -146,9 +298,9 @@ class VerletArrays:
         return m, V
 
     def _bond_energy(self) -> float:
-        """J, harmonic bonds K (r - r0)^2."""
+        """J, harmonic bonds K (r - r0)^2 and the brittle bonds carried here."""
         if not len(self.scene.bonds):
             return 0.0
         i, j = self.scene.bonds.T
         r = np.linalg.norm(self.X[i] - self.X[j], axis=1)
-        return float(np.sum(self._bond_K * (r - self._bond_r0) ** 2))
+        return float(np.sum(self._bond_K * (r - self._bond_r0) ** 2)) + self._brittle_energy()

@@ -21,9 +21,8 @@ kick dt/2 f/m into the velocity: exactly velocity Verlet with f included, no fix
 held particles (setforce) the added force is only reported by ``forces`` (their motion is
 prescribed). Partial prescriptions (a symmetry plane): ``fix setforce`` on those components.
 
-Not available on this engine (refused with a clear message): native bond breakage (laws
-evaluated by the coupling layer replace it), Cundall damping (virtual calibration tests),
-walls, checkpoint / restore. Bonded particles share one molecule, so fragments of a bonded
+Brittle bonds and Cundall damping, which this build lacks, are evaluated on the same arrays
+(lammps_family). Bonded particles share one molecule, so fragments of a bonded
 zone do not touch through the granular model (YADE's do); law bonds keep their compressive
 contact.
 """
@@ -37,8 +36,6 @@ from pathlib import Path
 from typing import Callable
 
 import numpy as np
-from scipy.spatial import cKDTree
-
 from ..scene import DemScene
 from .lammps_family import VerletArrays
 
@@ -81,10 +78,12 @@ class LiggghtsBackend(VerletArrays):
         n = scene.n
         i, j = scene.bonds.T if len(scene.bonds) else (np.zeros(0, int),) * 2
         r0 = np.linalg.norm(scene.x[i] - scene.x[j], axis=1)
-        keys = np.round(np.column_stack([scene.kn, r0]), 12)
+        keys = np.round(np.column_stack([self._engine_kn(scene), r0]), 12)
         types, btype = np.unique(keys, axis=0, return_inverse=True) if len(keys) else (np.zeros((0, 2)), [])
         lo, hi = scene.x.min(axis=0) - 10 * scene.radius.max(), scene.x.max(axis=0) + 10 * scene.radius.max()
         mats, atype = np.unique(np.column_stack([scene.young, scene.poisson]), axis=0, return_inverse=True)
+        if scene.walls:  # the walls' material is one more atom type (no atom has it)
+            mats = np.vstack([mats, self.wall_material()])
         lines = ["LIGGGHTS data (femdem)", "", f"{n} atoms", f"{len(scene.bonds)} bonds", f"{len(mats)} atom types",
                  f"{max(1, len(types))} bond types",
                  *(f"{a:.17g} {b:.17g} {c}lo {c}hi" for a, b, c in zip(lo, hi, "xyz")), "", "Atoms", ""]
@@ -122,6 +121,9 @@ class LiggghtsBackend(VerletArrays):
             self._cmd("bond_style harmonic\nneigh_modify exclude molecule all")
             for t, (kn, length) in enumerate(types):
                 self._cmd(f"bond_coeff {t + 1} {kn / 2:.17g} {length:.17g}")
+        for k, w in enumerate(scene.walls):  # primitive planes (both sides touch)
+            self._cmd(f"fix wall{k} all wall/gran model hertz tangential history primitive type {nt} "
+                      f"{'xyz'[w.axis]}plane {w.position:.17g}")
         self._cmd("fix integ all nve/sphere")
         # every particle's force before any setforce (held and partly held ones report it)
         self._cmd("fix sf all store/force")
@@ -142,13 +144,12 @@ class LiggghtsBackend(VerletArrays):
         self._partial: dict[int, list[int]] = {}
         self._added = np.zeros((n, 3))  # forces added to held particles since the last step (reported only)
         self._store = None
-        self._track_damping = not len(scene.bonds) and scene.restitution < 1.0
-        self._dissipated, self._fd_prev = 0.0, np.zeros((n, 3))
         fixed = scene.groups.get("fixed", np.zeros(0, int))
         if len(fixed):
             self._group("fixed", fixed)
             self._cmd("fix fixed fixed setforce 0 0 0")
             self.V[fixed] = 0.0
+        self._init_extras(scene)
 
     def _array(self, name: str, cols: int) -> np.ndarray:
         p = ctypes.cast(self.lib.lammps_extract_atom(self.h, name.encode()), ctypes.POINTER(ctypes.POINTER(ctypes.c_double)))
@@ -158,55 +159,24 @@ class LiggghtsBackend(VerletArrays):
     def start(self, between: Callable[[], None] | None = None) -> None:
         self._cmd("run 0")
         self._refresh_store()
-        if between is not None:
-            between()
+        self._hook_phase(between)
 
     def advance(self, between: Callable[[], None] | None = None) -> None:
-        x_old = self.X.copy() if self._track_damping else None
-        self._added[:] = 0.0
+        x_old = self._step_begin()
         if getattr(self, "_setup_needed", False):  # fixes added since the last run need a setup
             self.lib.lammps_command(self.h, b"run 1 pre yes post no")
             self._refresh_store()
             self._setup_needed = False
         else:
             self.lib.lammps_command(self.h, b"run 1 pre no post no")
-        if x_old is not None:
-            self._book_damping(x_old)
-        if between is not None:
-            between()
-
-    def _hertz(self):
-        """(pairs (p, 2), elastic Hertz force on the first of each pair (p, 3), energy J) of the
-        touching unbonded pairs."""
-        R, X = self.scene.radius, self.X
-        pairs = np.array(sorted(cKDTree(X).query_pairs(2 * R.max())), dtype=int).reshape(-1, 2)
-        if not len(pairs):
-            return pairs, np.zeros((0, 3)), 0.0
-        a, b = pairs.T
-        d = X[a] - X[b]
-        dist = np.linalg.norm(d, axis=1)
-        delta = np.maximum(R[a] + R[b] - dist, 0.0)
-        E, nu = self.scene.young, self.scene.poisson
-        Es = 1.0 / ((1 - nu[a] ** 2) / E[a] + (1 - nu[b] ** 2) / E[b])
-        Rs = R[a] * R[b] / (R[a] + R[b])
-        f = (4.0 / 3.0) * Es * np.sqrt(Rs) * delta**1.5
-        energy = float(np.sum((8.0 / 15.0) * Es * np.sqrt(Rs) * delta**2.5))
-        return pairs, (f / dist)[:, None] * d, energy
-
-    def _book_damping(self, x_old: np.ndarray) -> None:
-        """Work of the contact damping over the last step: total force minus the elastic Hertz
-        force, trapezoidal in time (LIGGGHTS does not report it)."""
-        pairs, f_el, _ = self._hertz()
-        F_el = np.zeros_like(self.X)
-        np.add.at(F_el, pairs[:, 0], f_el)
-        np.add.at(F_el, pairs[:, 1], -f_el)
-        f_d = self.F - F_el
-        f_d[self.scene.groups.get("fixed", np.zeros(0, int))] = 0.0
-        self._dissipated -= float(np.sum(0.5 * (f_d + self._fd_prev) * (self.X - x_old)))
-        self._fd_prev = f_d
+        self._step_end(x_old)
+        self._hook_phase(between)
 
     def _state(self) -> dict[str, np.ndarray]:
         return {"x": self.X, "v": self.V, "f": self.F, "omega": self.W, "torque": self.T}
+
+    def _omega(self) -> np.ndarray:
+        return self.W
 
     def _after_setup(self) -> None:
         self._refresh_store()
@@ -217,16 +187,6 @@ class LiggghtsBackend(VerletArrays):
         p = ctypes.cast(self.lib.lammps_extract_fix(self.h, b"sf", 1, 2, 0, 0),
                         ctypes.POINTER(ctypes.POINTER(ctypes.c_double)))
         self._store = np.ctypeslib.as_array(p[0], shape=(self.scene.n, 3))
-
-    def energies(self) -> dict[str, float]:
-        m, V = self._free_mass_velocity()
-        I = 0.4 * m * self.scene.radius**2
-        kinetic = 0.5 * float(np.einsum("n,ni,ni->", m, V, V) + np.einsum("n,ni,ni->", I, self.W, self.W))
-        if len(self.scene.bonds):
-            elastic = self._bond_energy()
-        else:  # Hertz contacts: (8/15) E* sqrt(R*) delta^(5/2) per touching pair
-            elastic = self._hertz()[2]
-        return {"kinetic": kinetic, "elastic": elastic, "dissipated": self._dissipated}
 
     def finalize(self) -> None:
         if self.h is not None:

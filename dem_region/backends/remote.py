@@ -7,7 +7,9 @@ a process with the OpenMPI of YADE, LIGGGHTS and mpi4py (ENGINES.md).
 from __future__ import annotations
 
 import os
+import shutil
 import socket
+import tempfile
 import time
 import subprocess
 import sys
@@ -25,26 +27,60 @@ ROOT = Path(__file__).resolve().parents[2]
 
 
 class RemoteBackend:
-    """Proxy for engine ``engine`` running under ``python`` (with ``env``) in a child process."""
+    """Proxy for engine ``engine`` running under ``python`` (with ``env``) in a child process;
+    with ``ranks`` > 1 the child is ``mpiexec -n ranks`` (the executable next to ``python``)
+    and rank 0 connects back to a listening socket (mpiexec does not hand on descriptors)."""
 
     native_laws = ("elastic",)
+    connect_timeout = 120.0  # s for the ranks to start and rank 0 to connect
 
-    def __init__(self, engine: str, python: str | None = None, env: dict | None = None):
+    def __init__(self, engine: str, python: str | None = None, env: dict | None = None, ranks: int = 1):
         self.name = engine
+        self.ranks = int(ranks)
         self.restart_file = "dem.yade.bz2" if engine == "yade" else "dem.npz"
         self.transport_s = 0.0  # s spent on the transport during start / advance
-        parent, child = socket.socketpair()
         env = dict(env if env is not None else os.environ)
         env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
-        self.proc = subprocess.Popen([python or sys.executable, "-m", "dem_region.worker", str(child.fileno()), engine],
-                                     pass_fds=(child.fileno(),), env=env, cwd=str(ROOT))
-        child.close()
+        python = python or sys.executable
+        if self.ranks == 1:
+            parent, child = socket.socketpair()
+            self.proc = subprocess.Popen([python, "-m", "dem_region.worker", str(child.fileno()), engine],
+                                         pass_fds=(child.fileno(),), env=env, cwd=str(ROOT))
+            child.close()
+        else:
+            parent = self._launch_ranks(python, engine, env)
         self.conn = Connection(parent.detach())
         self.blocks: list[shared_memory.SharedMemory] = []
         self.ids = np.zeros(0, int)
         self.prescribed = self.ids
         self._row = np.zeros(0, int)  # particle id -> its row in F / V, -1 if not an interface particle
         self._added_here = None  # (len(ids), 3) N added to interface particles during this hook
+
+    def _launch_ranks(self, python: str, engine: str, env: dict) -> socket.socket:
+        mpiexec = Path(python).parent / "mpiexec"
+        if not mpiexec.exists():
+            raise EngineUnavailable(f"dem.ranks = {self.ranks}: {mpiexec} missing; fix: ./scripts/setup.sh")
+        tmp = tempfile.mkdtemp(prefix="femdem-ranks-")
+        path = os.path.join(tmp, "worker.sock")
+        listener = socket.socket(socket.AF_UNIX)
+        try:
+            listener.bind(path)
+            listener.listen(1)
+            listener.settimeout(1.0)
+            self.proc = subprocess.Popen([str(mpiexec), "-n", str(self.ranks), python, "-m", "dem_region.worker",
+                                          f"unix:{path}", engine], env=env, cwd=str(ROOT),
+                                         start_new_session=False)
+            t0 = time.monotonic()
+            while True:
+                try:
+                    return listener.accept()[0]
+                except socket.timeout:
+                    if self.proc.poll() is not None or time.monotonic() - t0 > self.connect_timeout:
+                        self.proc.kill()
+                        raise self._died() from None
+        finally:
+            listener.close()
+            shutil.rmtree(tmp, ignore_errors=True)
 
     def _died(self) -> EngineUnavailable:
         try:
@@ -163,6 +199,9 @@ class RemoteBackend:
 
     def bond_state(self) -> dict:
         return self._call("call", "bond_state")[1]
+
+    def atoms_per_rank(self) -> list[int]:
+        return self._call("call", "atoms_per_rank")[1]
 
     def checkpoint(self, path) -> None:
         self._call("call", "checkpoint", str(path))
