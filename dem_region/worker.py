@@ -5,7 +5,7 @@ engine's mpiexec as ``python -m dem_region.worker unix:PATH ENGINE`` (several ra
 connects to the orchestrator's listening socket at PATH). Control messages are small pickled
 tuples over the socket; the interface arrays (forces out, velocities in) live in shared
 memory blocks the orchestrator created. On several ranks only rank 0 talks to the
-orchestrator: it broadcasts every message it receives, every rank runs it (the engine's
+orchestrator: it forwards every message it receives, every rank runs it (the engine's
 calls are collective), and only rank 0 replies and touches the shared memory. The worker
 exits when told, or when the socket closes (the orchestrator died), so no engine process
 outlives it.
@@ -42,35 +42,71 @@ def _plain(value):
     return value
 
 
+_TAG = 7  # rank 0 -> other ranks: the orchestrator's messages
+
+
+def _is_eof(msg) -> bool:
+    """The stop sign rank 0 forwards when the orchestrator is gone (other messages may be arrays)."""
+    return isinstance(msg, tuple) and msg == ("eof",)
+
+
 class _Ranks:
-    """The orchestrator's connection as every rank sees it: rank 0 receives and broadcasts,
-    the others take the broadcast; only rank 0 sends."""
+    """The orchestrator's connection as every rank sees it: rank 0 receives and forwards each
+    message to the other ranks; only rank 0 sends to the orchestrator."""
 
     def __init__(self, conn: Connection | None, comm=None):
         self.conn, self.comm = conn, comm
         self.root = comm is None or comm.Get_rank() == 0
+        self.told_stop = False
 
     def recv(self):
         if self.comm is None:
             return self.conn.recv()
-        msg = None
         if self.root:
             try:
                 msg = self.conn.recv()
             except (EOFError, OSError):
                 msg = ("eof",)
-        msg = self.comm.bcast(msg, root=0)
-        if msg == ("eof",):
+            self._to_ranks(msg)
+        else:
+            msg = self.comm.recv(source=0, tag=self._wait())
+        if _is_eof(msg):
             raise EOFError
         return msg
+
+    def _wait(self) -> int:
+        """Wait for rank 0's next message sleeping, not spinning: a blocking MPI receive polls
+        a core, which the orchestrator and rank 0 need while they talk (two ranks and the
+        orchestrator share this machine's two cores)."""
+        nap = 0.0
+        while not self.comm.Iprobe(source=0, tag=_TAG):
+            time.sleep(nap)
+            nap = min(2 * nap + 1e-6, 2e-4)
+        return _TAG
 
     def send(self, msg) -> None:
         if self.root:
             self.conn.send(msg)
 
+    def _to_ranks(self, msg) -> None:
+        self.told_stop = self.told_stop or _is_eof(msg)
+        for rank in range(1, self.comm.Get_size()):
+            self.comm.send(msg, dest=rank, tag=_TAG)
+
+    def tell_stop(self) -> None:
+        """Rank 0 lost the orchestrator anywhere (a send can fail too): release the other
+        ranks, or they wait forever while rank 0 waits for them in MPI_Finalize."""
+        if self.comm is not None and self.root and not self.told_stop:
+            self._to_ranks(("eof",))
+
     def share(self, value):
         """rank 0's value on every rank."""
-        return value if self.comm is None else self.comm.bcast(value, root=0)
+        if self.comm is None:
+            return value
+        if self.root:
+            self._to_ranks(value)
+            return value
+        return self.comm.recv(source=0, tag=self._wait())
 
 
 def serve(conn: Connection | None, engine: str, comm=None) -> None:
@@ -152,6 +188,7 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
         while handle(conn.recv()):
             pass
     except (EOFError, OSError):  # the orchestrator is gone: stop, and let the engine shut down cleanly
+        conn.tell_stop()
         backend.finalize()
     for b in state["blocks"]:
         b.close()

@@ -77,9 +77,11 @@ def _descendants(pid: int) -> list[int]:
     return out
 
 
-def test_killed_orchestrator_leaves_no_lammps_rank_behind(tmp_path):
+@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM])
+def test_killed_orchestrator_leaves_no_lammps_rank_behind(tmp_path, sig):
     """LAMMPS on two ranks under its mpiexec: when the orchestrator is killed, rank 0 sees the
-    socket close, tells the other rank, both shut LAMMPS down and mpiexec exits."""
+    socket close (in a receive or a send), tells the other rank, both shut LAMMPS down and
+    mpiexec exits."""
     out = tmp_path / "run"
     shm_before = set(glob.glob("/dev/shm/*"))
     proc = subprocess.Popen([sys.executable, "-m", "coupling.cli", "run", "coupled_vibration", "--dem", "lammps",
@@ -92,7 +94,7 @@ def test_killed_orchestrator_leaves_no_lammps_rank_behind(tmp_path):
     family = _descendants(proc.pid)
     ranks = [p for p in family if "dem_region.worker" in Path(f"/proc/{p}/cmdline").read_text(errors="ignore")]
     assert len(ranks) >= 3, "mpiexec and two ranks expected"  # mpiexec's own line names the worker too
-    os.kill(proc.pid, signal.SIGKILL)
+    os.kill(proc.pid, sig)
     proc.wait()
     t0 = time.time()
     while time.time() - t0 < 30:
