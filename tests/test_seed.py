@@ -1,5 +1,6 @@
 """The seed paper's examples (issue 9): coarse variants with their checks, and the coupled
 model against its standalone references when nothing breaks."""
+import numpy as np
 import pytest
 
 from conftest import assert_checks
@@ -104,11 +105,23 @@ def test_rod_impact_bad_settings_are_caught(femdem):
 
 
 def test_panel_buckling_coarse(femdem):
-    """Seed 5.2, coarse (work in progress: its buckling checks fail, see the scene): the
-    pre-buckling axial stiffness equals E11 H b / L within 2 %, and the 0_4 film buckles
-    (Southwell on its opening) well before the panel does."""
+    """Seed 5.2, coarse: the pre-buckling axial stiffness is E11 H b / L within 2 %; the 0_4
+    film buckles at the thin-film load and the panel at the delaminated (stepped) column's
+    load, each within 10 % of the closed form for this geometry; the film goes first; the
+    delaminated faces never interpenetrate (contact)."""
     code, s, err = femdem("run", "panel_buckling_coarse")
     assert code == 0, err
-    c, q = s["checks"], s["qoi"]
-    assert c["axial_stiffness"]["passed"], c["axial_stiffness"]
-    assert 0 < q["local_buckling_load"] < 0.5 * q["global_buckling_load"]
+    assert_checks(s)
+    q = s["qoi"]
+    assert q["local_buckling_load"] < 0.5 * q["global_buckling_load"] < q["closed_form_global_intact"]
+
+
+def test_stepped_column_reduces_to_euler_and_engesser():
+    """The delaminated panel's closed form: a uniform column gives Euler's clamped load, and
+    with shear flexibility Engesser's P_E / (1 + P_E / kGA); a softer middle lowers it."""
+    from coupling.scenes.panel_buckling import stepped_column_load
+    EI, L = 2.0, 1.0
+    PE = 4 * np.pi**2 * EI / L**2
+    assert stepped_column_load(EI, EI, L, 0.4, 0.0, 3 * PE) == pytest.approx(PE, rel=1e-9)
+    assert stepped_column_load(EI, EI, L, 0.4, 0.0, 3 * PE, 300.0, 300.0) == pytest.approx(PE / (1 + PE / 300), rel=1e-9)
+    assert stepped_column_load(EI, 0.5 * EI, L, 0.4, 0.0, 3 * PE) < PE

@@ -127,3 +127,31 @@ def fem_only(dyn: ExplicitDynamics, p: dict, t_end_default: float, probes: dict,
         fields=fem_fields(dyn), field_frames=p["output.field_frames"],
         energy_growth_tol=p["guards.energy_growth"], guards=fem_guards(dyn, hourglass_limit),
         checkpoint=lambda: (dyn.checkpoint_state(), None), restore=lambda d, _: dyn.restore_state(d), **kw)
+
+
+class FemNodes:
+    """The FEM's nodes seen the way LawBonds sees an engine's particles: positions_of (k, 3) m
+    (2D meshes padded with z = 0) and add_forces, accumulated in f (n, 3) N until the FEM's
+    force evaluation takes them (``ExplicitDynamics.node_forces``)."""
+
+    def __init__(self, dyn: ExplicitDynamics):
+        self.dyn = dyn
+        self.f = np.zeros((dyn.region.n_nodes, 3))
+
+    def positions_of(self, ids):
+        x = self.dyn.region.X[ids] + self.dyn.state.u[ids]
+        return x if x.shape[1] == 3 else np.pad(x, ((0, 0), (0, 3 - x.shape[1])))
+
+    def add_forces(self, ids, F):
+        np.add.at(self.f, ids, F)
+
+    def model(self, bonds, dyn: ExplicitDynamics):
+        """A node-force model for ExplicitDynamics.node_forces that evaluates ``bonds``."""
+        last = [0.0]
+
+        def forces():
+            self.f[:] = 0.0
+            bonds.apply(self, dyn.state.t - last[0])
+            last[0] = dyn.state.t
+            return self.f
+        return forces

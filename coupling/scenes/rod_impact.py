@@ -64,7 +64,7 @@ from fem_region.region import FemRegion
 
 from ..checks import check, energy_balance
 from ..params import CaseError, Param, density, modulus, positive
-from .common import fem_only
+from .common import FemNodes, fem_only
 
 NAME = "rod_impact"
 DESCRIPTION = "seed 5.3: two-layer circular plate, long-rod impact; stability under hourglass / penalty settings"
@@ -145,21 +145,6 @@ def tributary_area(X: np.ndarray, nodes: np.ndarray, n: int) -> np.ndarray:
     return area.ravel()
 
 
-class FemNodes:
-    """The FEM's nodes seen the way LawBonds sees an engine's particles: positions_of and
-    add_forces (accumulated, then taken by the FEM's force evaluation)."""
-
-    def __init__(self, dyn: ExplicitDynamics):
-        self.dyn = dyn
-        self.f = np.zeros((dyn.region.n_nodes, 3))
-
-    def positions_of(self, ids):
-        return self.dyn.region.X[ids] + self.dyn.state.u[ids]
-
-    def add_forces(self, ids, F):
-        np.add.at(self.f, ids, F)
-
-
 def build(p: dict, mode: str, dem: str):
     m, layer, pairs, key = plate_mesh(p)
     if p["fem.integration"] == "selective":
@@ -192,16 +177,7 @@ def build(p: dict, mode: str, dem: str):
     # coincident nodes: the bond normal is the plate normal (+z from the lower layer)
     bonds = LawBonds(pairs, X, np.tile([0.0, 0.0, 1.0], (len(pairs), 1)), area, law,
                      friction=p["interface.friction"], label="interlaminar")
-    nodes = FemNodes(dyn)
-    last = [0.0]
-
-    def interface_forces():
-        nodes.f[:] = 0.0
-        bonds.apply(nodes, dyn.state.t - last[0])
-        last[0] = dyn.state.t
-        return nodes.f
-
-    dyn.node_forces = [interface_forces]
+    dyn.node_forces = [FemNodes(dyn).model(bonds, dyn)]
     # stable step of the interface springs on the lighter of the two nodes (Gershgorin: 2 k)
     k_bond = law.K * area
     m_pair = np.minimum(dyn.m[pairs[:, 0]], dyn.m[pairs[:, 1]])
