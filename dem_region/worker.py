@@ -65,7 +65,7 @@ class _Ranks:
         if self.root:
             try:
                 msg = self.conn.recv()
-            except (EOFError, OSError):
+            except (EOFError, ConnectionError):
                 msg = ("eof",)
             self._to_ranks(msg)
         else:
@@ -173,7 +173,7 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
                 return False
             else:
                 conn.send(("error", f"unknown operation {op!r}"))
-        except (EOFError, OSError):
+        except (EOFError, ConnectionError):  # the orchestrator is gone (other OSErrors are reported)
             raise
         except Exception as exc:  # report, then keep serving so the orchestrator can stop cleanly
             import traceback
@@ -187,7 +187,7 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
     try:
         while handle(conn.recv()):
             pass
-    except (EOFError, OSError):  # the orchestrator is gone: stop, and let the engine shut down cleanly
+    except (EOFError, ConnectionError):  # the orchestrator is gone: stop, and let the engine shut down cleanly
         conn.tell_stop()
         backend.finalize()
     for b in state["blocks"]:

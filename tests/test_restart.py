@@ -1,5 +1,7 @@
 """Checkpoint and restart: a run killed with SIGKILL continues from its last checkpoint and
-reproduces the uninterrupted run bit for bit (FEM side and YADE, whose restart is exact)."""
+reproduces the uninterrupted run bit for bit (FEM side and every engine on one process; LAMMPS
+on two ranks to round-off: the restored atoms are spread and their neighbour lists rebuilt
+afresh, which changes the order of the force sums)."""
 import json
 import signal
 import subprocess
@@ -48,8 +50,11 @@ def _kill_after_checkpoint(args, out: Path, timeout=120):
                                           "output.history_every=20"]),
     ("coupled_vibration --dem lammps", ["run.steps=4000", "output.checkpoint_every=400", "clock.substeps=2",
                                         "output.history_every=20"]),
+    ("coupled_vibration --dem lammps", ["run.steps=4000", "output.checkpoint_every=400", "clock.substeps=2",
+                                        "output.history_every=20", "dem.ranks=2"]),
 ])
 def test_killed_run_resumes_bit_identical(tmp_path, case, sets):
+    exact = "dem.ranks=2" not in sets
     args = ["run", *case.split()] + sum((["--set", s] for s in sets), [])
     ref = tmp_path / "straight"
     assert _femdem(*args, "--out", str(ref), "--quiet").returncode == 0
@@ -61,7 +66,13 @@ def test_killed_run_resumes_bit_identical(tmp_path, case, sets):
     a, b = _history(ref), _history(out)
     assert a["time"].shape == b["time"].shape
     for k in a:
-        assert np.array_equal(a[k], b[k]), k
+        if exact:
+            assert np.array_equal(a[k], b[k]), k
+        else:  # round-off of reordered sums, against the quantity's scale (a ratio: 1; a momentum
+            # component: the largest component, the others are round-off themselves)
+            family = [j for j in a if j.startswith("momentum_")] if k.startswith("momentum_") else [k]
+            scale = max(max(np.abs(a[j]).max() for j in family), 1.0 if k.endswith("_rel") else 1e-300)
+            assert np.allclose(a[k], b[k], rtol=0, atol=1e-9 * scale), k
     s = json.loads((out / "summary.json").read_text())
     assert s["status"] == "ok" and not (out / "checkpoint").exists()
 

