@@ -28,6 +28,19 @@ class TestEngineConformance:
         assert code == 0
         assert_checks(s)
 
+    def test_interface_patch(self, femdem, engine):
+        """Uniform strain across the tie: free particles balance to round-off on every engine
+        (the LAMMPS family's bond rest lengths are exact), the interface residual is O(strain)."""
+        res = []
+        for e in (1e-4, 1e-5):
+            code, s, _ = femdem("run", "interface_patch", "--dem", engine, "--set", f"strain.xx={e}",
+                                "--set", f"strain.yy={-0.3 * e}", "--set", f"strain.xy={0.5 * e}",
+                                "--set", "mesh.spacing_ratio=2")
+            assert code == 0
+            assert_checks(s)
+            res.append(s["qoi"]["max_interface_residual_rel"])
+        assert res[1] / res[0] == pytest.approx(0.1, rel=0.05)
+
     def test_penalty_tie(self, femdem, engine):
         """The seed's transition contact (added forces on the engine's particles)."""
         code, s, _ = femdem("run", "coupled_vibration", "--dem", engine, "--set", "interface.tie=penalty",

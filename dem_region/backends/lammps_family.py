@@ -54,6 +54,22 @@ class VerletArrays:
     def _to_engine(self, state: dict | None = None, names=("v", "f")) -> None:
         """Copy arrays written here back into the engine: nothing to do for zero-copy views."""
 
+    def _bond_types(self, scene) -> tuple[np.ndarray, np.ndarray]:
+        """(types (t, 2): the engine's kn N/m and rest length m, type of each bond (nb,)). Bonds
+        share a type when kn and r0 agree to 13 significant digits; a type's values are the
+        means over its bonds, so each bond's rest length is exact to round-off (rounding r0 to
+        1e-12 m had left 2e-7 of the bond force on the free particles of a uniformly strained
+        lattice)."""
+        if not len(scene.bonds):
+            return np.zeros((0, 2)), np.zeros(0, int)
+        i, j = scene.bonds.T
+        values = np.column_stack([self._engine_kn(scene), np.linalg.norm(scene.x[j] - scene.x[i], axis=1)])
+        _, btype = np.unique(_significant(values, 13), axis=0, return_inverse=True)
+        btype = np.asarray(btype).ravel()
+        count = np.bincount(btype)
+        types = np.column_stack([np.bincount(btype, values[:, k]) / count for k in (0, 1)])
+        return types, btype
+
     # -- what the engines lack, on their arrays -----------------------------------------------------
     def _engine_kn(self, scene) -> np.ndarray:
         """(nb,) N/m, the engine's harmonic stiffness: breakable bonds are carried here (0 there)."""
@@ -308,3 +324,10 @@ class VerletArrays:
         i, j = self.scene.bonds.T
         r = np.linalg.norm(self.X[i] - self.X[j], axis=1)
         return float(np.sum(self._bond_K * (r - self._bond_r0) ** 2)) + self._brittle_energy()
+
+
+def _significant(a: np.ndarray, digits: int) -> np.ndarray:
+    """a rounded to ``digits`` significant digits (zeros stay zero)."""
+    a = np.asarray(a, float)
+    mag = 10.0 ** np.floor(np.log10(np.where(a != 0, np.abs(a), 1.0)))
+    return np.round(a / mag, digits - 1) * mag

@@ -76,10 +76,7 @@ class LiggghtsBackend(VerletArrays):
         self.h = ctypes.c_void_p()
         self.lib.lammps_open_no_mpi(len(argv), args, ctypes.byref(self.h))
         n = scene.n
-        i, j = scene.bonds.T if len(scene.bonds) else (np.zeros(0, int),) * 2
-        r0 = np.linalg.norm(scene.x[i] - scene.x[j], axis=1)
-        keys = np.round(np.column_stack([self._engine_kn(scene), r0]), 12)
-        types, btype = np.unique(keys, axis=0, return_inverse=True) if len(keys) else (np.zeros((0, 2)), [])
+        types, btype = self._bond_types(scene)
         lo, hi = scene.x.min(axis=0) - 10 * scene.radius.max(), scene.x.max(axis=0) + 10 * scene.radius.max()
         mats, atype = np.unique(np.column_stack([scene.young, scene.poisson]), axis=0, return_inverse=True)
         if scene.walls:  # the walls' material is one more atom type (no atom has it)
