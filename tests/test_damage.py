@@ -48,6 +48,18 @@ def test_laws_on_other_engines(femdem, case, args, engine):
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("engine", ["liggghts", "lammps"])
+@pytest.mark.parametrize("case", ["enf_coarse", "mixed_mode_coarse"])
+def test_mode_ii_and_mixed_mode_on_other_engines(femdem, case, engine):
+    """ENF and SLB on LIGGGHTS and LAMMPS: the same checks as on YADE (about a minute each, so
+    with -m slow; dcb_coarse and ply_fracture run on them in the default suite)."""
+    code, s, err = femdem("run", case, "--dem", engine)
+    assert code == 0, err
+    assert s["dem_backend"] == engine
+    assert_checks(s)
+
+
+@pytest.mark.slow
 def test_dcb_particle_size_study(femdem):
     """Halving the particle size changes the DCB peak load and the dissipated energy per
     crack area by less than 5 % (issue 6)."""
