@@ -50,8 +50,8 @@ def _kill_after_checkpoint(args, out: Path, timeout=120):
                                           "output.history_every=20"]),
     ("coupled_vibration --dem lammps", ["run.steps=4000", "output.checkpoint_every=400", "clock.substeps=2",
                                         "output.history_every=20"]),
-    ("coupled_vibration --dem lammps", ["run.steps=4000", "output.checkpoint_every=400", "clock.substeps=2",
-                                        "output.history_every=20", "dem.ranks=2"]),
+    pytest.param("coupled_vibration --dem lammps", ["run.steps=4000", "output.checkpoint_every=400", "clock.substeps=2",
+                                                    "output.history_every=20", "dem.ranks=2"], marks=pytest.mark.slow),
 ])
 def test_killed_run_resumes_bit_identical(tmp_path, case, sets):
     exact = "dem.ranks=2" not in sets
