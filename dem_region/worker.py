@@ -135,7 +135,7 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
                 break
             handle(msg)
         if len(state["ids"]):  # rank 0 reads the shared block, every rank sets the same values
-            V = conn.share(state["V"].copy() if state["V"] is not None else None)
+            V = conn.share(state["V"])  # (other ranks: None here, rank 0's values returned)
             backend.set_velocities(state["ids"], V)
 
     def handle(msg) -> bool:
