@@ -56,7 +56,7 @@ class LawBonds:
     law: object
     friction: float = 0.0
     volume: np.ndarray | None = None
-    along: np.ndarray | None = None  # (nb, 2) previous / next bond along the interface, -1 at an end
+    along: np.ndarray | None = None  # (nb, 2 t): previous / next bond along each of t tangents, -1 at an end
     v_reg: float = 1e-3
     label: str = "interlaminar"
 
@@ -76,18 +76,18 @@ class LawBonds:
         self.work = 0.0  # J, work of the bond forces on the separations (slice)
         self.t_failed = np.full(nb, np.nan)  # s, when each bond reached full decohesion
         self.time = 0.0
-        if self.along is not None:
-            self.along = np.asarray(self.along, int).reshape(nb, 2)
-            prev, nxt = self.along.T
-            a = np.where(prev >= 0, prev, np.arange(nb))
-            b = np.where(nxt >= 0, nxt, np.arange(nb))
+        if self.along is not None:  # one (previous, next) pair of columns per tangent direction
+            self.along = np.asarray(self.along, int).reshape(nb, -1)
             mid = 0.5 * (X[self.pairs[:, 0]] + X[self.pairs[:, 1]])
-            e = mid[b] - mid[a]
-            span = np.linalg.norm(e, axis=1)
-            if np.any(span == 0):
-                raise ValueError("an interface bond has no neighbour along the interface")
-            self._a, self._b, self._e_t = a, b, e / span[:, None]
-            self._h_over_span = np.linalg.norm(self.d0, axis=1) / span
+            self._dirs = []  # (a, b, e_t, h / span) per tangent direction
+            for prev, nxt in self.along.reshape(nb, -1, 2).transpose(1, 2, 0):
+                a = np.where(prev >= 0, prev, np.arange(nb))
+                b = np.where(nxt >= 0, nxt, np.arange(nb))
+                e = mid[b] - mid[a]
+                span = np.linalg.norm(e, axis=1)
+                if np.any(span == 0):
+                    raise ValueError("an interface bond has no neighbour along the interface")
+                self._dirs.append((a, b, e / span[:, None], np.linalg.norm(self.d0, axis=1) / span))
             self._X_mid = mid
         if hasattr(self.law, "initiate"):
             if self.volume is None:
@@ -107,8 +107,8 @@ class LawBonds:
         delta = x[j] - x[i] - self.d0
         if self.along is not None:  # rotation-free slip: + h d(u_n)/ds along the interface
             un = np.einsum("bi,bi->b", 0.5 * (x[i] + x[j]) - self._X_mid, self.normal)
-            self._grad = self._h_over_span * (un[self._b] - un[self._a])
-            delta = delta + self._grad[:, None] * self._e_t
+            for a, b, e_t, h_span in self._dirs:
+                delta = delta + (h_span * (un[b] - un[a]))[:, None] * e_t
         if hasattr(self.law, "initiate"):
             self.law.initiate(self.bond_stress(), np.einsum("bi,bi->b", delta, self.normal), self.normal)
         t, d = self.law.tractions_fast(delta, self.normal, self.damage)
@@ -133,12 +133,13 @@ class LawBonds:
         """Read the bonded particles from the engine, evaluate, add the bond forces."""
         F = self.evaluate(backend.positions_of(self.ids), dt)
         f = kernels.scatter_pairs(self._loc, F, len(self.ids))
-        if self.along is not None:  # the slip's gradient term: normal forces on the neighbours
-            q = 0.5 * self.area * self._h_over_span * np.einsum("bi,bi->b", self.traction, self._e_t)
-            for nb_, sign in ((self._b, 1.0), (self._a, -1.0)):
-                g = -sign * q[:, None] * self.normal[nb_]  # on each particle of the neighbour pair
-                np.add.at(f, self._loc[nb_, 0], g)
-                np.add.at(f, self._loc[nb_, 1], g)
+        if self.along is not None:  # the slip's gradient terms: normal forces on the neighbours
+            for a, b, e_t, h_span in self._dirs:
+                q = 0.5 * self.area * h_span * np.einsum("bi,bi->b", self.traction, e_t)
+                for nb_, sign in ((b, 1.0), (a, -1.0)):
+                    g = -sign * q[:, None] * self.normal[nb_]  # on each particle of the neighbour pair
+                    np.add.at(f, self._loc[nb_, 0], g)
+                    np.add.at(f, self._loc[nb_, 1], g)
         loaded = np.flatnonzero(np.any(f != 0.0, axis=1))  # open, failed bonds carry nothing
         backend.add_forces(self.ids[loaded], f[loaded])
 

@@ -149,7 +149,7 @@ class PlyBondLaw:
     K: (nb,) Pa/m, central stiffness per bond area (bond force A K dn along the bond, no shear
     spring: the lattice's diagonals carry shear); Gf: (nb, 2) J/m^2, energy a bond dissipates
     per unit of its area from initiation to full separation when the crack it joins runs normal
-    to global x (column 0) or y (column 1), chosen at initiation by the larger normal stress
+    to global x (column 0) or y (column 1) (or z, column 2, in a 3D block), chosen at initiation by the larger normal stress
     (so a crack dissipates the same energy per area whatever the particle size: the
     regularisation of Bazant & Oh's crack band, with the band one bond long); strengths: the nine Hoffman strengths; axes: (nb, 3, 3) ply axes
     (columns) of each bond in global coordinates.
@@ -169,7 +169,9 @@ class PlyBondLaw:
     def __post_init__(self):
         self.K = np.asarray(self.K, float)
         nb = self.K.size
-        self.Gf = np.broadcast_to(np.asarray(self.Gf, float).reshape(-1, 2), (nb, 2)).copy()
+        g = np.asarray(self.Gf, float)
+        g = g.reshape(-1, g.shape[-1] if g.ndim else 1)
+        self.Gf = np.broadcast_to(g, (nb, g.shape[1])).copy()  # one column per crack normal: x, y (, z)
         self.strength_scale = np.ones(nb)  # < 1: a weaker bond (an imperfection)
         self.axes = np.broadcast_to(np.asarray(self.axes, float), (nb, 3, 3)).copy()
         self.m0 = np.zeros(nb)  # onset opening (m), 0 until initiated
@@ -203,7 +205,9 @@ class PlyBondLaw:
             new[b[~crossing]] = False
         if new.any():
             m0 = dn[new]
-            Gf = np.where(np.abs(stress[new, 0]) >= np.abs(stress[new, 1]), self.Gf[new, 0], self.Gf[new, 1])
+            # the crack runs normal to the largest normal stress (ties: the first axis)
+            col = np.argmax(np.abs(stress[new, : self.Gf.shape[1]]), axis=1)
+            Gf = self.Gf[new][np.arange(col.size), col]
             mf = 2 * Gf / (self.K[new] * m0)
             self.snapback += int(np.sum(mf <= m0))
             self.m0[new], self.mf[new] = m0, np.maximum(mf, m0 * (1 + 1e-12))

@@ -21,7 +21,8 @@ class RigidImpactor:
     """shape: one of SHAPES; center: (dim,) m (ball centre, or centre of the flat face);
     radius: m; mass: kg; velocity: (dim,) m/s; axis: (dim,) from the face into the impactor
     (flat shapes); penalty: N/m per contact node; friction: Coulomb coefficient;
-    depth: m, how far behind a flat face a node still counts as in contact."""
+    depth: m, how far behind a flat face a node still counts as in contact; rounding: m, for
+    particle centres: the flat shape grown by the particle radius."""
 
     shape: str
     center: np.ndarray
@@ -32,6 +33,7 @@ class RigidImpactor:
     friction: float = 0.0
     axis: np.ndarray | None = None
     depth: float | None = None
+    rounding: float = 0.0  # m, flat shapes: edges rounded by this (a particle radius), see gap
     slip_velocity: float = 1e-3
     x: np.ndarray = field(init=False)
     v: np.ndarray = field(init=False)
@@ -58,9 +60,28 @@ class RigidImpactor:
             n = d / np.maximum(r, 1e-300)[:, None]
             return np.maximum(self.radius - r, 0.0), n
         s = d @ self.axis  # depth behind the face
-        lateral = np.linalg.norm(d - s[:, None] * self.axis, axis=1)
+        lat = d - s[:, None] * self.axis
+        lateral = np.linalg.norm(lat, axis=1)
+        if self.rounding > 0:
+            return self._rounded_gap(s, lat, lateral)
         inside = (s > 0) & (s < self.depth) & (lateral <= self.radius)
         return np.where(inside, s, 0.0), np.broadcast_to(-self.axis, x.shape)
+
+    def _rounded_gap(self, s, lat, lateral):
+        """The flat shape grown by a ball of radius ``rounding`` (the set of sphere centres that
+        touch it): flat under the face, a torus round the edge, a cylinder beside the side, so
+        a centre never finds itself deep inside when it moves across the edge."""
+        r, e = self.rounding, self.radius
+        e_r = lat / np.maximum(lateral, 1e-300)[:, None]
+        out = lateral - e  # > 0 beyond the edge
+        under = out <= 0
+        dist = np.where(s <= 0, np.hypot(np.maximum(out, 0.0), s), out)  # from the edge or the side
+        n_edge = np.where((s <= 0)[:, None], np.maximum(out, 0.0)[:, None] * e_r + s[:, None] * self.axis,
+                          e_r * np.maximum(dist, 0.0)[:, None]) / np.maximum(dist, 1e-300)[:, None]
+        pen = np.where(under, s + r, r - dist)
+        pen = np.where((pen > 0) & (s < self.depth), pen, 0.0)
+        n = np.where(under[:, None], -self.axis, n_edge)
+        return pen, n
 
     def forces(self, x: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, float]:
         """Nodal contact forces (m, dim) N for positions x and velocities v (m, dim); and the

@@ -161,7 +161,7 @@ def test_penalty_tie_converges_to_the_kinematic_tie(femdem):
     including the springs' store, is conserved."""
     errs = []
     for k in (2e7, 2e8, 2e9):
-        code, s, _ = femdem("run", "chain_consistency", "--set", "interface.tie=penalty", "--set", f"interface.penalty={k}")
+        code, s, _ = femdem("run", "chain_consistency", "--set", "interface.tie=penalty", "--set", f"interface.tie_penalty={k}")
         assert code == 0 and s["status"] == "ok"
         assert s["energy"]["balance_error_rel"] < 0.01
         errs.append(s["qoi"]["max_rel_diff_vs_monolithic"])
@@ -173,7 +173,7 @@ def test_resonant_subcycling_is_caught_with_a_diagnostic(femdem):
     """Hard case: a stiff penalty tie with 4 substeps resonates; the run must stop with exit
     code 3, say why, and still publish its run directory with status 'unstable'."""
     code, s, err = femdem("run", "chain_consistency", "--set", "interface.tie=penalty",
-                          "--set", "interface.penalty=2e8", "--set", "clock.substeps=4")
+                          "--set", "interface.tie_penalty=2e8", "--set", "clock.substeps=4")
     assert code == 3 and s["status"] == "unstable"
     assert "half-periods" in s["message"] and "clock.substeps=1" in s["message"]
     assert s["clock"]["steps"] < 100  # stopped early, not after producing garbage

@@ -99,7 +99,8 @@ def test_unit_slips_are_caught(femdem, setting, words):
     ("cfrp_beam_impact_coarse", ["--set=dem.half_width=0.5"], ["dem.half_width", "allowed"]),
     ("rod_impact_coarse", ["--set=interface.penalty=2e10"], ["interface.penalty", "toughness"]),
     ("rod_impact_coarse", ["--set=fem.integration=selective"], ["fem.integration", "allowed"]),
-    ("rod_impact_coarse", ["--mode", "coupled"], ["--mode coupled", "fem"]),
+    ("rod_impact_coarse", ["--mode", "dem"], ["--mode dem", "fem, coupled"]),
+    ("rod_impact_coarse", ["--mode", "coupled", "--set=dem.particle_size=0.005"], ["dem.particle_size", "divide"]),
 ])
 def test_bad_input_of_the_seed_scenes(femdem, case, args, words):
     code, summary, err = femdem("run", case, *args)

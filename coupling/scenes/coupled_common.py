@@ -23,7 +23,7 @@ COUPLING: dict[str, Param] = {
     "interface.tie": Param("kinematic", "tie scheme: kinematic (interface particles slaved to the FEM) or "
                            "penalty (springs to their host points, the seed paper's transition contact)",
                            kind="str", choices=("kinematic", "penalty")),
-    "interface.penalty": Param(0.0, "penalty tie stiffness per particle; 0 = 4 x the stiffest bond", unit="N/m", low=0.0),
+    "interface.tie_penalty": Param(0.0, "penalty tie stiffness per particle; 0 = 4 x the stiffest bond", unit="N/m", low=0.0),
 }
 
 
@@ -64,7 +64,7 @@ def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, st
     else:
         if not hasattr(backend, "add_forces"):
             raise NotImplementedError("the penalty tie needs added particle forces, not available on this engine yet")
-        tie = PenaltyTie(itf, backend, scene.mass, p["interface.penalty"] or 4 * float(scene.kn.max()))
+        tie = PenaltyTie(itf, backend, scene.mass, p["interface.tie_penalty"] or 4 * float(scene.kn.max()))
     dt_fem, dt_dem = fem.critical_dt(), min(backend.critical_dt(), tie.critical_dt(fem.m),
                                             models_critical_dt(models, scene))
     # 0 = automatic: as many substeps as the FEM step allows with the kinematic tie; one with

@@ -22,8 +22,19 @@ hourglass control or none, or selective), the two layers meshed separately and j
 to node by HashinCohesiveLaw bonds (penalty interface.penalty, Hashin initiation, linear
 softening, contact and friction after debonding) that the coupling layer evaluates on the
 FEM nodes (dem_region/law_bonds.py, the same code as on particles); rigid rod in penalty
-contact (contact.penalty) with the top surface. Modes: fem only (no DEM zone: see
-docs/status.md).
+contact (contact.penalty) with the top surface.
+
+Modes: fem (the above), and coupled: a particle zone, the square [0, dem.half_width]^2 under
+the rod through both layers (3D ply lattice of spacing dem.particle_size, dem_region/
+ply_block.py: each layer's E11, E22, G12, G23 on a cubic lattice, the layer interface as
+Hashin bonds with K = E22 / d, the material they replace, and rotation-free slip along both
+in-plane directions), the rod on the top particles (penalty contact.penalty x d^2, its edge
+rounded by the particle radius so a particle beside it is pushed aside, not found deep under
+the face), the FEM plate around it (an O-grid: the hole is the zone's square exactly, the
+layers' node bonds as in fem mode), the zone's outer faces x = a, y = a kinematically tied to
+it, its faces x = 0, y = 0 on the symmetry planes. The plies stay elastic (Table 3 has no ply
+strengths), as in fem mode; dem.ply_failure = true lets them fail by Hoffman with the
+carbon/epoxy strengths of 5.1 (at 100 m/s the layers then crack through under the rod).
 
 How the program detects a bad setting: before the first step (exit 2) a step above the
 stable limit of the elements, the contact penalty or the interface bonds is refused with
@@ -54,8 +65,13 @@ from __future__ import annotations
 import numpy as np
 import skfem
 
+from dem_region import ply_block
 from dem_region.law_bonds import LawBonds
 from dem_region.laws import HashinCohesiveLaw
+from dem_region.particle_impactor import ParticleImpactor
+from dem_region.ply_lattice import PlyMaterial
+from dem_region.scene import DemScene
+from fem_region.failure import HoffmanStrengths
 from fem_region import materials, mesh
 from fem_region.elements import ELEMENTS
 from fem_region.explicit import ExplicitDynamics, PrescribedMotion
@@ -65,10 +81,12 @@ from fem_region.region import FemRegion
 from ..checks import check, energy_balance
 from ..params import CaseError, Param, density, modulus, positive
 from .common import FemNodes, fem_only
+from .coupled_common import COUPLING, coupled_simulation
+from .ply_fracture import PLY
 
 NAME = "rod_impact"
 DESCRIPTION = "seed 5.3: two-layer circular plate, long-rod impact; stability under hourglass / penalty settings"
-MODES = ("fem",)
+MODES = ("fem", "coupled")
 
 PARAMETERS = {
     "plate.E11": modulus(152.4e9, "modulus along the fibres (Table 3)"),
@@ -99,6 +117,14 @@ PARAMETERS = {
     "rod.length": positive(0.1, "rod length (its mass: steel)", "m"),
     "rod.rho": density(7860.0, "rod density (Table 3)"),
     "rod.velocity": positive(100.0, "impact speed", "m/s"),
+    # coupled mode: the particle zone under the rod (ply strengths and energies: carbon/epoxy, as 5.1)
+    **{k: v for k, v in PLY.items() if k.startswith(("strength.", "fracture."))},
+    "dem.ply_failure": Param(False, "intralaminar failure (Hoffman, strength.* and fracture.*) in the particle "
+                             "zone; off: elastic layers as in the paper (Table 3 has interface strengths only)",
+                             kind="bool"),
+    "dem.half_width": positive(30e-3, "half side of the square particle zone under the rod (coupled)", "m"),
+    "dem.particle_size": positive(3e-3, "particle spacing d (divides the layer thickness and dem.half_width)", "m"),
+    **COUPLING,
 }
 T_END = 0.4e-3
 
@@ -109,12 +135,36 @@ def layer_C(p: dict, angle: float) -> np.ndarray:
     return materials.rotate(C, materials.ply_axes(angle, 3))
 
 
-def plate_mesh(p: dict) -> tuple[skfem.MeshHex1, np.ndarray, np.ndarray, np.ndarray]:
+def core_cells(p: dict) -> int:
+    """Grid cells along each side of the square hole the DEM zone fills (coupled mode)."""
+    return max(1, int(round(p["mesh.radial"] * p["dem.half_width"] / p["geometry.radius"])))
+
+
+def _map(u: np.ndarray, v: np.ndarray, p: dict, core: bool) -> tuple[np.ndarray, np.ndarray]:
+    """The square grid [0, 1]^2 onto the quarter disc. Without a core:
+    (u sqrt(1 - v^2 / 2), v sqrt(1 - u^2 / 2)). With one (an O-grid): the grid square
+    [0, s]^2 (s = core_cells / radial) onto the DEM zone's square [0, a]^2 exactly, and each
+    ray from it blended linearly from the square's side to the rim."""
+    R = p["geometry.radius"]
+    if not core:
+        return R * u * np.sqrt(1 - v**2 / 2), R * v * np.sqrt(1 - u**2 / 2)
+    a, s = p["dem.half_width"], core_cells(p) / p["mesh.radial"]
+    rho = np.maximum(u, v)
+    w = np.clip((rho - s) / (1 - s), 0.0, 1.0)[None]
+    uv = np.array([u, v])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        square = np.nan_to_num(a * uv / rho)
+        circle = np.nan_to_num(R * uv / np.hypot(u, v))
+    out = np.where(rho >= s, (1 - w) * square + w * circle, a * uv / s)
+    return out[0], out[1]
+
+
+def plate_mesh(p: dict, core: bool = False) -> tuple[skfem.MeshHex1, np.ndarray, np.ndarray, np.ndarray]:
     """Quarter disc of two layers (Hex8), the interface nodes doubled: (mesh, layer of each
-    element (nel,), interface pairs (k, 2) lower / upper node, grid key (n_nodes,) that
-    orders a surface's nodes as the structured grid). The square grid [0, 1]^2 is
-    mapped onto the quarter disc by (u sqrt(1 - v^2 / 2), v sqrt(1 - u^2 / 2))."""
-    n, m, h, R = p["mesh.radial"], p["mesh.per_layer"], p["geometry.layer_thickness"], p["geometry.radius"]
+    element (nel,), interface pairs (k, 2) lower / upper node, grid key (n_nodes,) of each
+    node on the structured (radial + 1)^2 grid). core: leave the DEM zone's square
+    [0, dem.half_width]^2 out (coupled mode)."""
+    n, m, h = p["mesh.radial"], p["mesh.per_layer"], p["geometry.layer_thickness"]
     g = np.linspace(0.0, 1.0, n + 1)
     box = mesh.box(g, g, np.linspace(0.0, 2 * h, 2 * m + 1), "hex8")
     P, T = box.p.copy(), box.t.copy()
@@ -125,19 +175,36 @@ def plate_mesh(p: dict) -> tuple[skfem.MeshHex1, np.ndarray, np.ndarray, np.ndar
     P = np.hstack([P, P[:, on]])
     upper = P[2, T].mean(axis=0) > h
     T[:, upper] = twin[T[:, upper]]
+    pairs = np.column_stack([on, twin[on]])
     u, v = P[0].copy(), P[1].copy()
-    P[0], P[1] = R * u * np.sqrt(1 - v**2 / 2), R * v * np.sqrt(1 - u**2 / 2)
+    P[0], P[1] = _map(u, v, p, core)
     key = np.round(v * n) * (n + 1) + np.round(u * n)
-    return skfem.MeshHex1(P, T), upper.astype(int), np.column_stack([on, twin[on]]), key
+    if core:  # drop the hole's elements, then the nodes no element uses
+        s = core_cells(p) / n
+        keep = np.maximum(u[T].mean(axis=0), v[T].mean(axis=0)) > s
+        T, upper = T[:, keep], upper[keep]
+        used = np.unique(T)
+        renumber = np.full(P.shape[1], -1)
+        renumber[used] = np.arange(used.size)
+        P, T, key = P[:, used], renumber[T], key[used]
+        pairs = renumber[pairs]
+        pairs = pairs[(pairs >= 0).all(axis=1)]
+    return skfem.MeshHex1(np.ascontiguousarray(P), np.ascontiguousarray(T)), upper.astype(int), pairs, key.astype(int)
 
 
-def tributary_area(X: np.ndarray, nodes: np.ndarray, n: int) -> np.ndarray:
-    """(len(nodes),) m^2: a quarter of each adjoining quad of the structured surface grid
-    (nodes in grid order, (n + 1)^2 of them)."""
-    xy = X[nodes, :2].reshape(n + 1, n + 1, 2)
+def tributary_area(p: dict, core: bool = False) -> np.ndarray:
+    """((radial + 1)^2,) m^2 by grid key: a quarter of each adjoining quad of the mapped
+    surface grid (none from the DEM zone's hole)."""
+    n = p["mesh.radial"]
+    g = np.linspace(0.0, 1.0, n + 1)
+    U, V = np.meshgrid(g, g)  # row = v, column = u: key = row (n + 1) + column
+    xy = np.stack(_map(U, V, p, core), axis=-1)
     a = xy[1:, 1:] - xy[:-1, :-1]
     b = xy[:-1, 1:] - xy[1:, :-1]
     quad = 0.5 * np.abs(a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0])
+    if core:
+        c = core_cells(p)
+        quad[:c, :c] = 0.0
     area = np.zeros((n + 1, n + 1))
     for di in (0, 1):
         for dj in (0, 1):
@@ -145,68 +212,189 @@ def tributary_area(X: np.ndarray, nodes: np.ndarray, n: int) -> np.ndarray:
     return area.ravel()
 
 
-def build(p: dict, mode: str, dem: str):
-    m, layer, pairs, key = plate_mesh(p)
+def plate_region(p: dict, core: bool) -> tuple[FemRegion, np.ndarray, np.ndarray]:
+    """(FEM plate, interface node pairs (k, 2), grid key (n_nodes,))."""
+    m, layer, pairs, key = plate_mesh(p, core)
     if p["fem.integration"] == "selective":
         raise CaseError("fem.integration = 'selective': the 90 layer couples normal and shear terms in 3D; "
                         "allowed full or reduced")
     C = np.array([layer_C(p, 0.0), layer_C(p, 90.0)])[layer]
     region = FemRegion(m, ELEMENTS["hex8"], C, p["plate.rho"], 1.0, p["fem.integration"], "total_lagrangian",
                        hourglass=p["fem.hourglass"], hourglass_kappa=p["fem.hourglass_kappa"])
-    X, n, h, R = region.X, p["mesh.radial"], p["geometry.layer_thickness"], p["geometry.radius"]
+    return region, pairs, key
+
+
+def supports(region: FemRegion, p: dict) -> list[PrescribedMotion]:
+    """Clamped rim, symmetry planes x = 0 and y = 0."""
+    X, R = region.X, p["geometry.radius"]
     rim = np.flatnonzero(np.hypot(X[:, 0], X[:, 1]) > R * (1 - 1e-9))
     sym_x, sym_y = np.flatnonzero(X[:, 0] < 1e-9 * R), np.flatnonzero(X[:, 1] < 1e-9 * R)
-    supports = [PrescribedMotion(np.concatenate([3 * rim + k for k in range(3)])),
-                PrescribedMotion(3 * sym_x), PrescribedMotion(3 * sym_y + 1)]
-    top = np.flatnonzero(np.abs(X[:, 2] - 2 * h) < 1e-9 * h)
-    top = top[np.argsort(key[top])]  # grid order
-    top_area = tributary_area(X, top, n)
-    k_contact = p["contact.penalty"] * float(np.median(top_area))
-    rod_mass = 0.25 * p["rod.rho"] * np.pi * p["rod.radius"] ** 2 * p["rod.length"]
-    rod = RigidImpactor("rod", np.array([0.0, 0.0, 2 * h + 1e-9]), p["rod.radius"], rod_mass,
-                        np.array([0.0, 0.0, -p["rod.velocity"]]), k_contact, axis=np.array([0.0, 0.0, 1.0]))
-    dyn = ExplicitDynamics(region, supports=supports, impactors=[rod])
-    # the layer interface: node pairs with their tributary areas
-    pairs = pairs[np.argsort(key[pairs[:, 0]])]
-    area = tributary_area(X, pairs[:, 0], n)
+    return [PrescribedMotion(np.concatenate([3 * rim + k for k in range(3)])),
+            PrescribedMotion(3 * sym_x), PrescribedMotion(3 * sym_y + 1)]
+
+
+def interface_bonds(p: dict, dyn: ExplicitDynamics, pairs: np.ndarray, area: np.ndarray) -> LawBonds:
+    """The layers' node-to-node Hashin bonds, evaluated on the FEM nodes each force
+    evaluation; sets the stable step they allow."""
     try:
         law = HashinCohesiveLaw(K=p["interface.penalty"], Z0=p["interface.Z0"], R0=p["interface.R0"],
                                 GIc=p["interface.GIc"], GIIc=p["interface.GIIc"])
     except ValueError as exc:
         raise CaseError(f"interface.penalty = {p['interface.penalty']:g}: {exc}") from None
     # coincident nodes: the bond normal is the plate normal (+z from the lower layer)
-    bonds = LawBonds(pairs, X, np.tile([0.0, 0.0, 1.0], (len(pairs), 1)), area, law,
+    bonds = LawBonds(pairs, dyn.region.X, np.tile([0.0, 0.0, 1.0], (len(pairs), 1)), area, law,
                      friction=p["interface.friction"], label="interlaminar")
     dyn.node_forces = [FemNodes(dyn).model(bonds, dyn)]
     # stable step of the interface springs on the lighter of the two nodes (Gershgorin: 2 k)
     k_bond = law.K * area
     m_pair = np.minimum(dyn.m[pairs[:, 0]], dyn.m[pairs[:, 1]])
-    dt_interface = float(np.min(2.0 / np.sqrt(2 * 2 * k_bond / np.maximum(m_pair, 1e-300))))
-    dyn.critical_dt_extra = dt_interface
+    dyn.critical_dt_extra = float(np.min(2.0 / np.sqrt(2 * 2 * k_bond / np.maximum(m_pair, 1e-300))))
+    return bonds
+
+
+def rod_mass(p: dict) -> float:
+    """kg, the quarter model's share of the rod."""
+    return 0.25 * p["rod.rho"] * np.pi * p["rod.radius"] ** 2 * p["rod.length"]
+
+
+def build(p: dict, mode: str, dem: str):
+    if mode == "coupled":
+        return _build_coupled(p, dem)
+    region, pairs, key = plate_region(p, core=False)
+    X, n, h, R = region.X, p["mesh.radial"], p["geometry.layer_thickness"], p["geometry.radius"]
+    area_by_key = tributary_area(p)
+    top = np.flatnonzero(np.abs(X[:, 2] - 2 * h) < 1e-9 * h)
+    k_contact = p["contact.penalty"] * float(np.median(area_by_key[key[top]]))
+    rod = RigidImpactor("rod", np.array([0.0, 0.0, 2 * h + 1e-9]), p["rod.radius"], rod_mass(p),
+                        np.array([0.0, 0.0, -p["rod.velocity"]]), k_contact, axis=np.array([0.0, 0.0, 1.0]))
+    dyn = ExplicitDynamics(region, supports=supports(region, p), impactors=[rod])
+    area = area_by_key[key[pairs[:, 0]]]
+    bonds = interface_bonds(p, dyn, pairs, area)
     centre = np.flatnonzero((np.hypot(X[:, 0], X[:, 1]) < 1e-9 * R) & (X[:, 2] < 1e-9 * h))[0]
-
-    def separation():
-        dn = np.einsum("bi,bi->b", bonds.delta, bonds.normal)
-        return float(max(dn.max(), 0.0))
-
     probes = {"rod_velocity": lambda: float(-rod.v[2]),
               "rod_displacement": lambda: float(-(rod.x[2] - 2 * h)),
               "plate_deflection": lambda: float(-dyn.state.u[centre, 2]),
-              "layer_separation": separation,
+              "layer_separation": lambda: _separation(bonds),
               "debonded_area": lambda: float(4 * area @ bonds.failed()),
               "damaged_area": lambda: float(4 * area @ (bonds.damage > 0))}
-    e_fem = dyn.energies
-
-    def energies():
-        e = dict(e_fem())
-        b = bonds.energies()
-        e["internal"] += b["internal"]
-        e["dissipated"] += b["dissipated"]
-        return e
-
     sim = fem_only(dyn, p, T_END, probes)
-    sim.energies = energies
+    sim.energies = _with_bonds(sim.energies, [bonds])
     sim.counts.update({"interface_bonds": len(pairs)})
+    return sim
+
+
+def _separation(*families: LawBonds) -> float:
+    """m, the largest interface opening."""
+    return float(max(max(np.einsum("bi,bi->b", b.delta, b.normal).max(initial=0.0), 0.0) for b in families))
+
+
+def _with_bonds(energies, families):
+    """An energy ledger that adds the coupling layer's bonds evaluated on FEM nodes."""
+    def total():
+        e = dict(energies())
+        for b in families:
+            eb = b.energies()
+            e["internal"] += eb["internal"]
+            e["dissipated"] += eb["dissipated"]
+        return e
+    return total
+
+
+# -- coupled: a particle zone under the rod ------------------------------------------------------
+def plate_material(p: dict) -> PlyMaterial:
+    """The layers' material on the lattice: elastic unless dem.ply_failure (Table 3 gives no
+    ply strengths: the paper's plies stay elastic, only the interface fails)."""
+    Yt, Yc, S23 = p["strength.Yt"], p["strength.Yc"], p["strength.S23"]
+    if not p["dem.ply_failure"]:
+        inf = np.inf
+        k = HoffmanStrengths(Xt=inf, Xc=inf, Yt=inf, Yc=inf, Zt=inf, Zc=inf, S23=inf, S13=inf, S12=inf)
+        return PlyMaterial(p["plate.E11"], p["plate.E22"], p["plate.G12"], p["plate.G23"], p["plate.rho"], k,
+                           p["fracture.Gf_fibre"], p["fracture.Gf_matrix"])
+    k = HoffmanStrengths(Xt=p["strength.Xt"], Xc=p["strength.Xc"], Yt=Yt, Yc=Yc, Zt=Yt, Zc=Yc, S23=S23,
+                         S13=p["strength.S12"], S12=p["strength.S12"])
+    return PlyMaterial(p["plate.E11"], p["plate.E22"], p["plate.G12"], p["plate.G23"], p["plate.rho"], k,
+                       p["fracture.Gf_fibre"], p["fracture.Gf_matrix"])
+
+
+def particle_zone(p: dict):
+    """(block, scene, intralaminar LawBonds, interlaminar LawBonds, rod on the particles):
+    the square [0, a]^2 through both layers; columns on x = 0, y = 0 (symmetry) and on
+    x = a, y = a (tied to the FEM) carry half cells."""
+    a, d, h = p["dem.half_width"], p["dem.particle_size"], p["geometry.layer_thickness"]
+    for key, length in (("geometry.layer_thickness", h), ("dem.half_width", a)):
+        if abs(length / d - round(length / d)) > 1e-6:
+            raise CaseError(f"dem.particle_size = {d:g}: must divide {key} = {length:g} m")
+    if not 2 * p["rod.radius"] > a > p["rod.radius"] + 2 * d:
+        raise CaseError(f"dem.half_width = {a:g}: allowed between the rod radius + 2 particles "
+                        f"({p['rod.radius'] + 2 * d:g} m) and twice the rod radius ({2 * p['rod.radius']:g} m)")
+    N, rows = int(round(a / d)) + 1, int(round(h / d))
+    try:
+        block = ply_block.build((0.0, 0.0, 0.0), (N, N), [rows, rows], [0.0, 90.0], d, plate_material(p),
+                                half_planes=[(0, 0), (1, 0), (0, N - 1), (1, N - 1)])
+    except ValueError as exc:
+        raise CaseError(f"plate.G12 = {p['plate.G12']:g}: {exc}") from None
+    l = block.x[block.intra_pairs[:, 1]] - block.x[block.intra_pairs[:, 0]]
+    intra = LawBonds(block.intra_pairs, block.x, l, block.intra_area, block.intra_law, volume=block.volume,
+                     label="intralaminar")
+    try:
+        law = ply_block.interlaminar_law(block, p["interface.Z0"], p["interface.R0"], p["interface.GIc"],
+                                         p["interface.GIIc"])
+    except ValueError as exc:
+        raise CaseError(f"interface.GIc = {p['interface.GIc']:g}: on the particle lattice (K = E22 / d = "
+                        f"{block.inter_K:.3g} Pa/m) {exc}") from None
+    inter = LawBonds(block.inter_pairs, block.x, np.tile([0.0, 0.0, 1.0], (len(block.inter_pairs), 1)),
+                     block.inter_area, law, friction=p["interface.friction"], along=block.inter_along,
+                     label="interlaminar")
+    i, j, k = block.index.T
+    tied = np.flatnonzero((i == N - 1) | (j == N - 1))
+    K_max = float(np.max(block.intra_law.K))
+    scene = DemScene(block.x, block.radius, block.density, np.vstack([block.intra_pairs, block.inter_pairs]),
+                     kn=1e-9 * K_max * d**2, ks=0.0, young=K_max * d, placeholder_bonds=True,
+                     groups={"interface": tied})
+    # the rod grown by the particle radius meets the particle centres (rounded edge: a particle
+    # beside the rod is pushed aside, not found deep under the face)
+    rod = RigidImpactor("rod", np.array([0.0, 0.0, 2 * h + 1e-9]), p["rod.radius"], rod_mass(p),
+                        np.array([0.0, 0.0, -p["rod.velocity"]]), p["contact.penalty"] * d**2,
+                        axis=np.array([0.0, 0.0, 1.0]), rounding=block.radius)
+    impactor = ParticleImpactor(rod, np.flatnonzero(k >= k.max() - 1), fixed=(True, True, False))
+    return block, scene, intra, inter, impactor
+
+
+def _build_coupled(p: dict, dem: str):
+    block, scene, intra, inter, impactor = particle_zone(p)
+    h = p["geometry.layer_thickness"]
+    area_by_key = tributary_area(p, core=True)
+    fem_bonds = []
+
+    def make(extra_mass):
+        region, pairs, key = plate_region(p, core=True)
+        dyn = ExplicitDynamics(region, supports=supports(region, p), extra_mass=extra_mass)
+        fem_bonds.append(interface_bonds(p, dyn, pairs, area_by_key[key[pairs[:, 0]]]))
+        return dyn
+
+    sim, clock = coupled_simulation(p, make, scene, dem, T_END, models=(intra, inter, impactor))
+    backend, bonds = clock.dem, fem_bonds[-1]
+    fem_area = bonds.area
+    i, j, k = block.index.T
+    free = np.setdiff1d(np.arange(block.n), scene.groups["interface"])
+    for dofs, on in (("xy", (i == 0) & (j == 0)), ("x", (i == 0) & (j > 0)), ("y", (j == 0) & (i > 0))):
+        ids = np.intersect1d(np.flatnonzero(on), free)
+        backend.prescribe(ids, dofs)  # the symmetry planes
+        backend.set_velocities(ids, np.zeros((len(ids), 3)))
+    centre = np.flatnonzero((i == 0) & (j == 0) & (k == 0))[0]
+    z0 = block.x[centre, 2]
+    rod = impactor.imp
+    sim.probes.update({
+        "rod_velocity": lambda: float(-rod.v[2]),
+        "rod_displacement": lambda: float(-(rod.x[2] - 2 * h)),
+        "plate_deflection": lambda: float(-(backend.positions_of(np.array([centre]))[0, 2] - z0)),
+        "layer_separation": lambda: _separation(bonds, inter),
+        "debonded_area": lambda: float(4 * (fem_area @ bonds.failed() + inter.area @ inter.failed())),
+        "damaged_area": lambda: float(4 * (fem_area @ (bonds.damage > 0) + inter.area @ (inter.damage > 0))),
+        "failed_intralaminar": lambda: float(np.sum(intra.failed())),
+    })
+    sim.energies = _with_bonds(sim.energies, [bonds])
+    sim.counts.update({"interface_bonds": len(bonds.pairs) + len(inter.pairs), "law_bonds": len(intra.pairs)})
     return sim
 
 
