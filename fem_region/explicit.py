@@ -263,6 +263,7 @@ class ExplicitDynamics:
              "contact_prev": [{"f": f, "F": F} for f, F in self._contact_prev]}
         if hasattr(self, "f_int"):
             d["f_int"] = self.f_int
+        d["node_forces"] = [m.checkpoint_state() for m in self.node_forces if hasattr(m, "checkpoint_state")]
         return d
 
     def restore_state(self, d: dict) -> None:
@@ -279,6 +280,9 @@ class ExplicitDynamics:
         self._contact_prev = [(np.array(c["f"]), np.array(c["F"])) for c in d.get("contact_prev", [])]
         if "f_int" in d:
             self.f_int = np.array(d["f_int"])
+        stateful = [m for m in self.node_forces if hasattr(m, "checkpoint_state")]
+        for m, st in zip(stateful, d.get("node_forces", [])):
+            m.restore_state(st)
 
     # -- energies ----------------------------------------------------------------------------
     def kinetic_energy(self) -> float:

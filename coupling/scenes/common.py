@@ -145,13 +145,29 @@ class FemNodes:
     def add_forces(self, ids, F):
         np.add.at(self.f, ids, F)
 
-    def model(self, bonds, dyn: ExplicitDynamics):
+    def model(self, bonds, dyn: ExplicitDynamics) -> "NodeBondForces":
         """A node-force model for ExplicitDynamics.node_forces that evaluates ``bonds``."""
-        last = [0.0]
+        return NodeBondForces(self, bonds, dyn)
 
-        def forces():
-            self.f[:] = 0.0
-            bonds.apply(self, dyn.state.t - last[0])
-            last[0] = dyn.state.t
-            return self.f
-        return forces
+
+class NodeBondForces:
+    """Law bonds on FEM nodes as an ExplicitDynamics node-force model: called at each force
+    evaluation, returns (n, 3) N; its state (damage, separations, work) goes into the FEM's
+    checkpoint."""
+
+    def __init__(self, nodes: FemNodes, bonds, dyn: ExplicitDynamics):
+        self.nodes, self.bonds, self.dyn = nodes, bonds, dyn
+        self.last = 0.0  # s, time of the last evaluation
+
+    def __call__(self) -> np.ndarray:
+        self.nodes.f[:] = 0.0
+        self.bonds.apply(self.nodes, self.dyn.state.t - self.last)
+        self.last = self.dyn.state.t
+        return self.nodes.f
+
+    def checkpoint_state(self) -> dict:
+        return {"bonds": self.bonds.checkpoint_state(), "last": self.last}
+
+    def restore_state(self, d: dict) -> None:
+        self.bonds.restore_state(d["bonds"])
+        self.last = float(d["last"])

@@ -324,9 +324,11 @@ def particle_zone(p: dict):
     for key, length in (("geometry.layer_thickness", h), ("dem.half_width", a)):
         if abs(length / d - round(length / d)) > 1e-6:
             raise CaseError(f"dem.particle_size = {d:g}: must divide {key} = {length:g} m")
-    if not 2 * p["rod.radius"] > a > p["rod.radius"] + 2 * d:
-        raise CaseError(f"dem.half_width = {a:g}: allowed between the rod radius + 2 particles "
-                        f"({p['rod.radius'] + 2 * d:g} m) and twice the rod radius ({2 * p['rod.radius']:g} m)")
+    top = min(2 * p["rod.radius"], 0.5 * p["geometry.radius"])
+    if not top >= a > p["rod.radius"] + 2 * d:
+        raise CaseError(f"dem.half_width = {a:g}: allowed above the rod radius + 2 particles "
+                        f"({p['rod.radius'] + 2 * d:g} m) and up to twice the rod radius or half the plate "
+                        f"radius ({top:g} m)")
     N, rows = int(round(a / d)) + 1, int(round(h / d))
     try:
         block = ply_block.build((0.0, 0.0, 0.0), (N, N), [rows, rows], [0.0, 90.0], d, plate_material(p),
