@@ -23,6 +23,7 @@ import time
 import numpy as np
 
 from dem_region.backends.base import DemBackend
+from dem_region.kernels import add_rows
 from fem_region.explicit import ExplicitDynamics
 
 from .simulation import Stage
@@ -55,7 +56,7 @@ class ModelStep:
         return self._x[self._index[np.asarray(ids, int)]]
 
     def add_forces(self, ids: np.ndarray, F: np.ndarray) -> None:
-        np.add.at(self._f, self._index[np.asarray(ids, int)], np.asarray(F, float).reshape(-1, 3))
+        add_rows(self._f, self._index[np.asarray(ids, int)], np.ascontiguousarray(F, float).reshape(-1, 3))
 
 
 class CoupledClock:

@@ -22,6 +22,27 @@ def scatter_pairs(loc, F, n):
 
 
 @njit(cache=True)
+def add_rows(target, ids, F):
+    """target[ids] += F for (k, 3) rows F, repeated ids summed (np.add.at, without its overhead)."""
+    for r in range(ids.shape[0]):
+        for k in range(3):
+            target[ids[r], k] += F[r, k]
+
+
+@njit(cache=True)
+def add_slope_forces(f, loc, normal, q, a, b):
+    """The work-conjugate forces of an interface slip's slope term, into f (n, 3) N: each
+    bond's q (nb,) N acts along the normal of its neighbour pairs, -q on both particles of
+    the next pair b and +q on both of the previous pair a (a, b (nb,) bond rows)."""
+    for m in range(loc.shape[0]):
+        for c, s in ((b[m], -q[m]), (a[m], q[m])):
+            for k in range(3):
+                g = s * normal[c, k]
+                f[loc[c, 0], k] += g
+                f[loc[c, 1], k] += g
+
+
+@njit(cache=True)
 def bond_stress(loc, force, d0, cell, n):
     """(nb, 6) Voigt Pa: mean of the end particles' Love-Weber stresses
     sigma_p = sum_b (f_b (x) l_b) / (2 V_p), f_b = A_b t_b (tension positive), symmetrised."""

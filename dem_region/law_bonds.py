@@ -136,10 +136,7 @@ class LawBonds:
         if self.along is not None:  # the slip's gradient terms: normal forces on the neighbours
             for a, b, e_t, h_span in self._dirs:
                 q = 0.5 * self.area * h_span * np.einsum("bi,bi->b", self.traction, e_t)
-                for nb_, sign in ((b, 1.0), (a, -1.0)):
-                    g = -sign * q[:, None] * self.normal[nb_]  # on each particle of the neighbour pair
-                    np.add.at(f, self._loc[nb_, 0], g)
-                    np.add.at(f, self._loc[nb_, 1], g)
+                kernels.add_slope_forces(f, self._loc, self.normal, q, a, b)
         loaded = np.flatnonzero(np.any(f != 0.0, axis=1))  # open, failed bonds carry nothing
         backend.add_forces(self.ids[loaded], f[loaded])
 

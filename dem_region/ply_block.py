@@ -32,6 +32,7 @@ from scipy import optimize
 
 from .laws import HashinCohesiveLaw, PlyBondLaw
 from .ply_lattice import PlyMaterial
+from .scene import DemScene
 
 # the 13 bond directions of a cell: 3 axial, 6 face diagonals, as integer offsets
 AXIAL = ((1, 0, 0), (0, 1, 0), (0, 0, 1))
@@ -196,3 +197,11 @@ def _in_plane_factor(index: np.ndarray, cut: np.ndarray, pairs: np.ndarray) -> n
 def interlaminar_law(block: PlyBlock, Z0: float, R0: float, GIc: float, GIIc: float, eta: float = 2.284,
                      mixed_mode: str = "bk") -> HashinCohesiveLaw:
     return HashinCohesiveLaw(K=block.inter_K, Z0=Z0, R0=R0, GIc=GIc, GIIc=GIIc, eta=eta, mixed_mode=mixed_mode)
+
+
+def engine_scene(block: PlyBlock, **kw) -> DemScene:
+    """The engine's view of a block: particles, and a placeholder bond (1e-9 of the stiffest
+    law bond) on every law pair so that the engine adds no contact of its own between them."""
+    K_max = float(np.max(block.intra_law.K))
+    return DemScene(block.x, block.radius, block.density, np.vstack([block.intra_pairs, block.inter_pairs]),
+                    kn=1e-9 * K_max * block.d**2, ks=0.0, young=K_max * block.d, placeholder_bonds=True, **kw)

@@ -1,6 +1,7 @@
 """Rigid impactors in penalty contact with the FEM surface nodes, with Coulomb friction.
 
-Shapes: "sphere" (3D) / "cylinder" (2D: a disc, the section of a cylinder), "flat_punch"
+Shapes: "sphere" (3D) / "cylinder" (2D: a disc, the section of a cylinder; 3D with ``axis``:
+a cylinder along it), "flat_punch"
 and "rod" (a flat circular or strip face of half-width ``radius`` whose normal into the
 target is -axis). Normal force per node k_n * penetration along the surface normal of the
 impactor; friction mu |f_n| opposite to the tangential slip velocity, regularised over
@@ -47,6 +48,8 @@ class RigidImpactor:
         self.v = np.array(self.velocity, float)
         self.a = np.zeros_like(self.x)
         self.x_at_forces = self.x.copy()
+        if self.shape == "cylinder" and self.axis is not None:
+            self.axis = np.asarray(self.axis, float) / np.linalg.norm(self.axis)
         if self.shape in ("flat_punch", "rod"):
             ax = np.asarray(self.axis if self.axis is not None else -self.v, float)
             self.axis = ax / np.linalg.norm(ax)
@@ -56,6 +59,8 @@ class RigidImpactor:
         """x: (m, dim) node positions -> (penetration (m,) m >= 0, normal (m, dim) pointing at the node)."""
         d = x - self.x
         if self.shape in ("sphere", "cylinder"):
+            if self.shape == "cylinder" and self.axis is not None:  # 3D: a cylinder along axis
+                d = d - np.outer(d @ self.axis, self.axis)
             r = np.linalg.norm(d, axis=1)
             n = d / np.maximum(r, 1e-300)[:, None]
             return np.maximum(self.radius - r, 0.0), n

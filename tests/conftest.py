@@ -1,3 +1,4 @@
+import coupling  # noqa: F401  (first: it sets the BLAS threads before numpy loads)
 import json
 from pathlib import Path
 

@@ -44,6 +44,32 @@ def test_beam_impact_all_dem_equals_fem_when_elastic(femdem):
     assert abs(peaks["dem"] / peaks["fem"] - 1) < 0.05
 
 
+def test_beam_impact_3d_coarse(femdem):
+    """Seed 5.1 in 3D (a quarter of a 3 mm strip, free edges, 3D ply lattice zone, Hex8
+    around it): its checks pass (ledger, spring-mass estimate); both 0/90 interfaces are
+    damaged; the interfaces' mean delamination lengths are their areas over the width."""
+    code, s, err = femdem("run", "beam_impact_3d_coarse", "--dem", "liggghts")
+    assert code == 0, err
+    assert_checks(s)
+    q = s["qoi"]
+    assert q["damaged_interface_length_0"] > 0 and q["damaged_interface_length_1"] > 0
+    for k in (0, 1):
+        assert q[f"delamination_length_{k}"] == pytest.approx(q[f"delamination_area_{k}"] / 3e-3, rel=1e-12)
+    assert 0.0 <= q["damage_at_zone_edge"] <= 1.0
+
+
+def test_beam_impact_3d_coupled_equals_fem_when_elastic(femdem):
+    """3D, damage out of reach, to past the peak: the coupled strip (lattice + Hex8, tied on
+    a face) and the all-Hex8 strip give the same peak centre deflection within 3 %."""
+    peaks = {}
+    for mode in ("fem", "coupled"):
+        code, s, err = femdem("run", "beam_impact_3d_coarse", "--mode", mode, "--dem", "liggghts", *ELASTIC,
+                              "--set=clock.t_end=0.15e-3")
+        assert code == 0, err
+        peaks[mode] = s["qoi"]["peak_centre_displacement"]
+    assert abs(peaks["coupled"] / peaks["fem"] - 1) < 0.03, peaks
+
+
 # concrete, sheet and adhesive out of reach: the CFRP-strengthened beam, elastic
 CFRP_ELASTIC = ["--set=concrete.ft=1e10", "--set=concrete.fc=1e11", "--set=cfrp.T0=1e12", "--set=bond.Z0=1e10",
                 "--set=bond.R0=1e10", "--set=bond.GIc=1e8", "--set=bond.GIIc=1e8", "--set=clock.t_end=0.75e-3"]

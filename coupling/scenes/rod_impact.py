@@ -70,7 +70,6 @@ from dem_region.law_bonds import LawBonds
 from dem_region.laws import HashinCohesiveLaw
 from dem_region.particle_impactor import ParticleImpactor
 from dem_region.ply_lattice import PlyMaterial
-from dem_region.scene import DemScene
 from fem_region.failure import HoffmanStrengths
 from fem_region import materials, mesh
 from fem_region.elements import ELEMENTS
@@ -349,10 +348,7 @@ def particle_zone(p: dict):
                      label="interlaminar")
     i, j, k = block.index.T
     tied = np.flatnonzero((i == N - 1) | (j == N - 1))
-    K_max = float(np.max(block.intra_law.K))
-    scene = DemScene(block.x, block.radius, block.density, np.vstack([block.intra_pairs, block.inter_pairs]),
-                     kn=1e-9 * K_max * d**2, ks=0.0, young=K_max * d, placeholder_bonds=True,
-                     groups={"interface": tied})
+    scene = ply_block.engine_scene(block, groups={"interface": tied})
     # the rod grown by the particle radius meets the particle centres (rounded edge: a particle
     # beside the rod is pushed aside, not found deep under the face)
     rod = RigidImpactor("rod", np.array([0.0, 0.0, 2 * h + 1e-9]), p["rod.radius"], rod_mass(p),

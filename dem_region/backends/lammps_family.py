@@ -6,7 +6,8 @@ evaluation and final half kick, so an added force goes into f (the next first ha
 it) plus its missing final half kick dt/2 f/m into v: velocity Verlet with the force included.
 Held particles (``fix setforce``) report the force before the setforce (store/force) plus what
 was added; partial prescriptions (a symmetry plane) hold only some components.
-Needs: X, V, F, _store, _added (n, 3); mass (n,); prescribed ids; _partial {id: components};
+Needs: X, V, F, _store, _added (n, 3); mass (n,); prescribed ids; _partial {id: components}
+(and _driven (n, 3) bool, kept by prescribe);
 scene; dt; name; _cmd(text), _group(name, ids); _setup_needed; _state() (the per-atom
 arrays a checkpoint saves) and _after_setup() (refresh views after a setup run).
 
@@ -256,6 +257,9 @@ class VerletArrays:
             self._cmd(f"fix part{k} part{k} setforce {comps}")
             for i in ids.tolist():
                 self._partial[i] = ["xyz".index(c) for c in dofs]
+            if getattr(self, "_driven", None) is None or len(self._driven) != len(self.X):
+                self._driven = np.zeros((len(self.X), 3), bool)  # (n, 3): components a setforce holds
+            self._driven[np.ix_(ids, ["xyz".index(c) for c in dofs])] = True
             return
         if len(self.prescribed):
             raise NotImplementedError(f"{self.name} adapter: one fully prescribed set (the interface) per scene")
@@ -278,16 +282,16 @@ class VerletArrays:
     def add_forces(self, ids: np.ndarray, F: np.ndarray) -> None:
         """Forces F (k, 3) N added to particles ``ids`` at this step (call from the hook)."""
         ids, F = np.asarray(ids, int), np.asarray(F, float).reshape(-1, 3)
-        np.add.at(self._added, ids, F)
+        _add_rows(self._added, ids, F)
         # held: the interface (written velocities) and the fixed group (clamps) take no motion
         held = np.isin(ids, self.prescribed) | np.isin(ids, self.scene.groups.get("fixed", np.zeros(0, int)))
         free, Ff = ids[~held], F[~held].copy()
         if self.scene.plane:
             Ff[:, 2] = 0.0
-        for i in set(free.tolist()) & self._partial.keys():
-            Ff[np.ix_(free == i, self._partial[i])] = 0.0  # driven components take no force
-        np.add.at(self.F, free, Ff)
-        np.add.at(self.V, free, 0.5 * self.dt * Ff / self.mass[free, None])
+        if self._partial:
+            Ff[self._driven[free]] = 0.0  # driven components take no force
+        _add_rows(self.F, free, Ff)
+        _add_rows(self.V, free, 0.5 * self.dt * Ff / self.mass[free, None])
 
     def forces(self, ids: np.ndarray) -> np.ndarray:
         """(k, 3) N: the engine's force before any setforce, plus what was added this step."""
@@ -313,8 +317,8 @@ class VerletArrays:
         m[self.prescribed] = 0.0
         m[self.scene.groups.get("fixed", np.zeros(0, int))] = 0.0
         V = self.V.copy()
-        for i, comps in self._partial.items():
-            V[i, comps] = 0.0
+        if self._partial:
+            V[self._driven] = 0.0
         return m, V
 
     def _bond_energy(self) -> float:
@@ -324,6 +328,15 @@ class VerletArrays:
         i, j = self.scene.bonds.T
         r = np.linalg.norm(self.X[i] - self.X[j], axis=1)
         return float(np.sum(self._bond_K * (r - self._bond_r0) ** 2)) + self._brittle_energy()
+
+
+def _add_rows(target: np.ndarray, ids: np.ndarray, F: np.ndarray) -> None:
+    """target[ids] += F, repeated ids summed. (The LAMMPS worker's venv has no numba; the
+    coupling layer hands over unique ids, where fancy indexing is exact and np.add.at slow.)"""
+    if len(np.unique(ids)) == len(ids):
+        target[ids] += F
+    else:
+        np.add.at(target, ids, F)
 
 
 def _significant(a: np.ndarray, digits: int) -> np.ndarray:
