@@ -1,5 +1,6 @@
 """beam_impact: the seed paper's example 5.1, a clamped [0_6/90_4/0_6] graphite/epoxy beam
-struck along its centre line by a rigid cylinder (2D plane strain, half model by symmetry).
+struck along its centre line by a rigid cylinder (2D plane strain, half model by symmetry;
+the 3D variant is beam_impact_3d).
 
 Dimensions are not in the paper (nor in the text of its reference, Geubelle & Baylor 1998);
 the choices, fixed here and in cases/seed/beam_impact.toml: plies 0.15 mm (laminate 2.4 mm),
