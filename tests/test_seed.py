@@ -24,10 +24,11 @@ def test_beam_impact_coarse(femdem, tmp_path):
 
 def test_beam_impact_coupled_equals_fem_when_elastic(femdem):
     """With damage out of reach the coupled model (DEM zone + FEM) and the all-FEM beam give
-    the same peak centre deflection within 3 %: the zone and the tie add no spurious compliance."""
+    the same peak centre deflection within 3 %: the zone and the tie add no spurious compliance
+    (to 0.15 ms: the peak is at 83 us)."""
     peaks = {}
     for mode in ("fem", "coupled"):
-        code, s, err = femdem("run", "beam_impact_coarse", "--mode", mode, *ELASTIC)
+        code, s, err = femdem("run", "beam_impact_coarse", "--mode", mode, *ELASTIC, "--set=clock.t_end=0.15e-3")
         assert code == 0, err
         peaks[mode] = s["qoi"]["peak_centre_displacement"]
     assert abs(peaks["coupled"] / peaks["fem"] - 1) < 0.03
