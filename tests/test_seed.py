@@ -91,6 +91,36 @@ def test_cfrp_beam_impact_coarse(femdem):
     assert q["cracked_bonds"] > 0 and q["sheet_broken_bonds"] == 0  # T0 = 2.2 GPa is far off
 
 
+def test_cfrp_beam_impact_3d_coarse(femdem):
+    """Seed 5.4 in 3D, coarse (a quarter of the beam, concrete and sheet lattices, Hex8
+    around them): the ledger closes, cracking starts when the no-fracture Hex8 beam's bottom
+    fibre reaches the weakest bond's strength, fracture makes the beam more compliant, and the
+    no-fracture 3D beam deflects as the 2D plane-stress one within 2 % (a 3 in square section:
+    plane stress and 3D bending agree to the Poisson effect)."""
+    code, s, err = femdem("run", "cfrp_beam_impact_3d_coarse", "--dem", "liggghts")
+    assert code == 0, err
+    c, q = s["checks"], s["qoi"]
+    assert c["energy_balance"]["passed"] and c["crack_onset_time"]["passed"], c
+    assert q["displacement_change_by_fracture"] > 0.05 and q["cracked_bonds"] > 0
+    code, s2, err = femdem("run", "cfrp_beam_impact_coarse", "--mode", "fem")
+    assert code == 0, err
+    assert q["peak_midspan_displacement_no_fracture"] == pytest.approx(s2["qoi"]["peak_midspan_displacement"],
+                                                                       rel=0.02)
+
+
+@pytest.mark.slow
+def test_cfrp_beam_impact_3d_coupled_equals_fem_when_elastic(femdem):
+    """3D, fracture out of reach: the coupled quarter beam and the all-Hex8 one deflect alike
+    (peak mid-span displacement within 3 %)."""
+    peaks = {}
+    for mode in ("fem", "coupled"):
+        code, s, err = femdem("run", "cfrp_beam_impact_3d_coarse", "--mode", mode, "--dem", "liggghts",
+                              *CFRP_ELASTIC)
+        assert code == 0, err
+        peaks[mode] = s["qoi"]["peak_midspan_displacement"]
+    assert abs(peaks["coupled"] / peaks["fem"] - 1) < 0.03, peaks
+
+
 def test_cfrp_beam_impact_coupled_equals_fem_when_elastic(femdem):
     """With nothing able to break, the coupled beam (particle zone with the sheet as
     particles and the adhesive as bonds, FEM with the sheet smeared into its bottom row) and
