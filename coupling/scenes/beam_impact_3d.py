@@ -39,7 +39,7 @@ from fem_region.impactor import RigidImpactor
 from ..params import CaseError, Param, positive
 from . import beam_impact
 from .beam_impact import blocks, thickness
-from .common import fem_only, make_region
+from .common import fem_only, hold_symmetry_planes, make_region
 from .coupled_common import coupled_simulation
 from .ply_fracture import ply_material
 from .standalone import dem_only
@@ -159,10 +159,7 @@ def build(p: dict, mode: str, dem: str):
         backend, n_elements = clock.dem, clock.fem.region.n_elements
     i, j, k = block.index.T
     held = np.concatenate([scene.groups.get("interface", []), scene.groups.get("fixed", [])]).astype(int)
-    for dofs, on in (("xy", (i == 0) & (j == 0)), ("x", (i == 0) & (j > 0)), ("y", (j == 0) & (i > 0))):
-        ids = np.setdiff1d(np.flatnonzero(on), held)
-        backend.prescribe(ids, dofs)  # the symmetry planes
-        backend.set_velocities(ids, np.zeros((len(ids), 3)))
+    hold_symmetry_planes(backend, i, j, held)
     bottom = np.flatnonzero((i == 0) & (j == 0) & (k == 0))[0]
     z0 = block.x[bottom, 2]
     sim.probes.update({

@@ -332,7 +332,7 @@ def build(p: dict, mode: str, dem: str):
         "midspan_displacement": lambda: -float(backend.positions_of(np.array([mid]))[0, 1] - zone.x[mid, 1]),
         "load": lambda: float(-2 * load.force()[1] / width_share),
         "model_size": lambda: float(fem_count + zone.scene.n),
-        **_damage_probes(p, zone),
+        **damage_probes(p, zone, 2 * zone.bond_length),  # both halves of the beam
     })
     sim.counts.update({"law_bonds": sum(len(b.pairs) for b in zone.models)})
     t_end = p["clock.t_end"] or T_END
@@ -344,14 +344,15 @@ def build(p: dict, mode: str, dem: str):
     return sim
 
 
-def _damage_probes(p: dict, zone: Zone) -> dict:
+def damage_probes(p: dict, zone, whole: np.ndarray, up: int = 1) -> dict:
+    """Crack and debond measures of a zone; whole: (nb,) m of the beam's length each adhesive
+    bond stands for (both halves); up: the axis of the depth (1 in 2D, 2 in 3D)."""
     H, d = p["geometry.depth"], zone.d
     c = zone.concrete
     xm = 0.5 * (zone.x[c.pairs[:, 0]] + zone.x[c.pairs[:, 1]])
     near = np.abs(xm[:, 0]) < H
-    bottom = near & (xm[:, 1] < d)  # bonds touching the bottom row
-    top = (np.abs(xm[:, 0]) < H / 2) & (xm[:, 1] > H - d)
-    whole = 2 * zone.bond_length  # both halves of the beam
+    bottom = near & (xm[:, up] < d)  # bonds touching the bottom row
+    top = (np.abs(xm[:, 0]) < H / 2) & (xm[:, up] > H - d)
     edge_b = zone.column[zone.bond.pairs[:, 1]] >= zone.n_col - 3
     edge_c = zone.column[c.pairs].min(axis=1) >= zone.n_col - 3
     w = p["crack.visible_opening"]
@@ -360,7 +361,7 @@ def _damage_probes(p: dict, zone: Zone) -> dict:
         "bottom_cracked": lambda: float(np.sum(cracked()[bottom])),
         "concrete_softening": lambda: float(np.sum(c.damage > 0)),
         "top_cracked": lambda: float(np.sum(cracked()[top])),
-        "crack_height": lambda: float(xm[near & cracked(), 1].max() + d / 2) if np.any(near & cracked()) else 0.0,
+        "crack_height": lambda: float(xm[near & cracked(), up].max() + d / 2) if np.any(near & cracked()) else 0.0,
         "cracked_bonds": lambda: float(np.sum(cracked())),
         "traction_free_bonds": lambda: float(np.sum(c.failed())),
         "debonded_length": lambda: float(whole @ zone.bond.failed()),
@@ -407,11 +408,12 @@ def first_time(time: np.ndarray, series: np.ndarray) -> float:
     return float(time[hit[0]]) if hit.size else float("nan")
 
 
-def no_fracture_history(p: dict) -> dict:
-    """The fem mode's history (no fracture), run here: the reference curve of the checks."""
+def no_fracture_history(p: dict, scene_build=None) -> dict:
+    """The fem mode's history (no fracture), run here: the reference curve of the checks;
+    scene_build: the build of the scene whose fem mode it is (default this one's)."""
     from ..simulation import run_clock
     q = dict(p, **{"clock.dt": 0.0, "output.field_frames": 0})
-    return run_clock(build(q, "fem", ""))["history"]
+    return run_clock((scene_build or build)(q, "fem", ""))["history"]
 
 
 def evaluate(p: dict, h: dict, mode: str, reference=None):

@@ -36,7 +36,7 @@ from fem_region.failure import HoffmanStrengths
 from ..params import CaseError, Param
 from . import cfrp_beam_impact as cfrp
 from .cfrp_beam_impact import T_END, drop_load, geometry_check, rows
-from .common import fem_only, make_region
+from .common import fem_only, hold_symmetry_planes, make_region
 from .coupled_common import coupled_simulation
 from .standalone import dem_only
 
@@ -238,16 +238,14 @@ def build(p: dict, mode: str, dem: str):
         backend, fem_count = clock.dem, clock.fem.region.n_elements
         held = zone.scene.groups["interface"]
     i, j = zone.column, zone.width_index
-    for dofs, on in (("xy", (i == 0) & (j == 0)), ("x", (i == 0) & (j > 0)), ("y", (j == 0) & (i > 0))):
-        ids = np.setdiff1d(np.flatnonzero(on), held)
-        backend.prescribe(ids, dofs)  # the symmetry planes
-        backend.set_velocities(ids, np.zeros((len(ids), 3)))
+    hold_symmetry_planes(backend, i, j, held)
     mid = zone.sheet_ids[0]
     sim.probes.update({
         "midspan_displacement": lambda: -float(backend.positions_of(np.array([mid]))[0, 2] - zone.x[mid, 2]),
         "load": lambda: float(-4 * load.force()[2]),
         "model_size": lambda: float(fem_count + zone.scene.n),
-        **_damage_probes(p, zone),
+        # lengths along the beam: the bonds' areas (whole beam) over the width
+        **cfrp.damage_probes(p, zone, 4 * zone.bond_area / p["geometry.width"], up=2),
     })
     sim.counts.update({"law_bonds": sum(len(b.pairs) for b in zone.models)})
     t_end = p["clock.t_end"] or T_END
@@ -257,33 +255,6 @@ def build(p: dict, mode: str, dem: str):
             "bond_damage": zone.bond.softened(), "concrete_pairs": zone.concrete.pairs.astype(float),
             "bond_pairs": zone.bond.pairs.astype(float)})
     return sim
-
-
-def _damage_probes(p: dict, zone: Zone) -> dict:
-    """As cfrp_beam_impact's, with heights along z and lengths = areas (whole beam) / width."""
-    H, d = p["geometry.depth"], zone.d
-    c = zone.concrete
-    xm = 0.5 * (zone.x[c.pairs[:, 0]] + zone.x[c.pairs[:, 1]])
-    near = np.abs(xm[:, 0]) < H
-    bottom = near & (xm[:, 2] < d)
-    top = (np.abs(xm[:, 0]) < H / 2) & (xm[:, 2] > H - d)
-    whole = 4 * zone.bond_area / p["geometry.width"]  # mean length along the beam, both halves
-    edge_b = zone.column[zone.bond.pairs[:, 1]] >= zone.n_col - 3
-    edge_c = zone.column[c.pairs].min(axis=1) >= zone.n_col - 3
-    w = p["crack.visible_opening"]
-    cracked = lambda: (c.damage > 0) & (c.split(c.delta)[0] >= w)
-    return {
-        "bottom_cracked": lambda: float(np.sum(cracked()[bottom])),
-        "concrete_softening": lambda: float(np.sum(c.damage > 0)),
-        "top_cracked": lambda: float(np.sum(cracked()[top])),
-        "crack_height": lambda: float(xm[near & cracked(), 2].max() + d / 2) if np.any(near & cracked()) else 0.0,
-        "cracked_bonds": lambda: float(np.sum(cracked())),
-        "traction_free_bonds": lambda: float(np.sum(c.failed())),
-        "debonded_length": lambda: float(whole @ zone.bond.failed()),
-        "damaged_bond_length": lambda: float(whole @ (zone.bond.damage > 0)),
-        "sheet_broken": lambda: float(np.sum(zone.sheet.failed())),
-        "damage_at_zone_edge": lambda: float(max(zone.bond.damage[edge_b].max(), c.damage[edge_c].max())),
-    }
 
 
 def _build_fem(p: dict):
@@ -311,14 +282,8 @@ def _build_fem(p: dict):
     return fem_only(dyn, p, T_END, probes)
 
 
-def no_fracture_history(p: dict) -> dict:
-    from ..simulation import run_clock
-    q = dict(p, **{"clock.dt": 0.0, "output.field_frames": 0})
-    return run_clock(build(q, "fem", ""))["history"]
-
-
 def evaluate(p: dict, h: dict, mode: str):
-    return cfrp.evaluate(p, h, mode, reference=no_fracture_history)
+    return cfrp.evaluate(p, h, mode, reference=lambda q: cfrp.no_fracture_history(q, build))
 
 
 def plot(p: dict, h: dict, qoi: dict, plots_dir):

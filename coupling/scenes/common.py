@@ -171,3 +171,12 @@ class NodeBondForces:
     def restore_state(self, d: dict) -> None:
         self.bonds.restore_state(d["bonds"])
         self.last = float(d["last"])
+
+
+def hold_symmetry_planes(backend, i: np.ndarray, j: np.ndarray, held: np.ndarray) -> None:
+    """Particles on the planes x = 0 (column i == 0) and y = 0 (j == 0) of a quarter model
+    keep x, y or both at rest; ``held``: particles another constraint drives (tie, clamp)."""
+    for dofs, on in (("xy", (i == 0) & (j == 0)), ("x", (i == 0) & (j > 0)), ("y", (j == 0) & (i > 0))):
+        ids = np.setdiff1d(np.flatnonzero(on), held)
+        backend.prescribe(ids, dofs)
+        backend.set_velocities(ids, np.zeros((len(ids), 3)))

@@ -79,7 +79,7 @@ from fem_region.region import FemRegion
 
 from ..checks import check, energy_balance
 from ..params import CaseError, Param, density, modulus, positive
-from .common import FemNodes, fem_only
+from .common import FemNodes, fem_only, hold_symmetry_planes
 from .coupled_common import COUPLING, coupled_simulation
 from .ply_fracture import PLY
 
@@ -374,11 +374,7 @@ def _build_coupled(p: dict, dem: str):
     backend, bonds = clock.dem, fem_bonds[-1]
     fem_area = bonds.area
     i, j, k = block.index.T
-    free = np.setdiff1d(np.arange(block.n), scene.groups["interface"])
-    for dofs, on in (("xy", (i == 0) & (j == 0)), ("x", (i == 0) & (j > 0)), ("y", (j == 0) & (i > 0))):
-        ids = np.intersect1d(np.flatnonzero(on), free)
-        backend.prescribe(ids, dofs)  # the symmetry planes
-        backend.set_velocities(ids, np.zeros((len(ids), 3)))
+    hold_symmetry_planes(backend, i, j, held=scene.groups["interface"])
     centre = np.flatnonzero((i == 0) & (j == 0) & (k == 0))[0]
     z0 = block.x[centre, 2]
     rod = impactor.imp
