@@ -384,21 +384,26 @@ def _build_fem(p: dict, t: float, width_share: float):
     dyn = ExplicitDynamics(region, supports=[PrescribedMotion(support_dofs(region, p)), PrescribedMotion(2 * axis)],
                            loads=[load])
     mid = axis[np.argmin(X[axis, 1])]
-    # the concrete's stress at the bottom fibre at mid-span: the first element of the bottom
-    # row (smeared with the sheet: its strain is the concrete's, its stress is not)
-    centre = region.X[region.mesh.t.T].mean(axis=1)
-    first = int(np.argmin(centre[:, 0] + centre[:, 1]))
-    Dc = concrete_D(p)
+    return fem_only(dyn, p, T_END, no_fracture_probes(dyn, mid, concrete_D(p)[0], curve))
+
+
+def no_fracture_probes(dyn: ExplicitDynamics, mid: int, stiffness_row: np.ndarray, curve) -> dict:
+    """Probes of the no-fracture beam: mid-span displacement of node ``mid`` (down, along the
+    last axis), the drop load, and the concrete's sigma_xx at the bottom fibre at mid-span:
+    stiffness_row (the xx row of the concrete's D or C) on the strain of the bottom element
+    nearest the origin (smeared with the sheet: its strain is the concrete's, its stress is not)."""
+    region = dyn.region
+    up = region.dim - 1
+    first = int(np.argmin(region.X[region.mesh.t.T].mean(axis=1).sum(axis=1)))
 
     def bottom_stress():
         eps = region.centroid_strain_stress(dyn.state.u)[0][first]
-        return float(Dc[0] @ eps)
+        return float(stiffness_row @ eps)
 
-    probes = {"midspan_displacement": lambda: -float(dyn.state.u[mid, 1]),
-              "bottom_stress": bottom_stress,
-              "load": lambda: float(curve(dyn.state.t)),
-              "model_size": lambda: float(region.n_elements)}
-    return fem_only(dyn, p, T_END, probes)
+    return {"midspan_displacement": lambda: -float(dyn.state.u[mid, up]),
+            "bottom_stress": bottom_stress,
+            "load": lambda: float(curve(dyn.state.t)),
+            "model_size": lambda: float(region.n_elements)}
 
 
 # -- results --------------------------------------------------------------------------------------

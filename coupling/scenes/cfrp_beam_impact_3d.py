@@ -267,19 +267,7 @@ def _build_fem(p: dict):
     dyn = ExplicitDynamics(region, supports=supports(region, p, symmetry_x=True), loads=[load])
     mid = np.flatnonzero((X[:, 0] < 1e-12) & (X[:, 1] < 1e-12))
     mid = mid[np.argmin(X[mid, 2])]
-    centre = region.X[region.mesh.t.T].mean(axis=1)
-    first = int(np.argmin(centre[:, 0] + centre[:, 1] + centre[:, 2]))  # bottom layer at mid-span, mid-width
-    Cc = concrete_C(p)
-
-    def bottom_stress():  # the concrete's sigma_xx from the smeared element's strain
-        eps = region.centroid_strain_stress(dyn.state.u)[0][first]
-        return float(Cc[0] @ eps)
-
-    probes = {"midspan_displacement": lambda: -float(dyn.state.u[mid, 2]),
-              "bottom_stress": bottom_stress,
-              "load": lambda: float(curve(dyn.state.t)),
-              "model_size": lambda: float(region.n_elements)}
-    return fem_only(dyn, p, T_END, probes)
+    return fem_only(dyn, p, T_END, cfrp.no_fracture_probes(dyn, mid, concrete_C(p)[0], curve))
 
 
 def evaluate(p: dict, h: dict, mode: str):

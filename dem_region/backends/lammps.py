@@ -128,7 +128,8 @@ class LammpsBackend(VerletArrays):
         self._bond_K = types[btype, 0] / 2 if len(scene.bonds) else np.zeros(0)
         self._bond_r0 = types[btype, 1] if len(scene.bonds) else np.zeros(0)
         self.prescribed = np.zeros(0, int)
-        self._partial: dict[int, list[int]] = {}
+        self._driven = np.zeros((n, 3), bool)  # components a symmetry plane's setforce holds
+        self._n_partial = 0
         self._added = np.zeros((n, 3))
         self._setup_needed = False
         fixed = scene.groups.get("fixed", np.zeros(0, int))

@@ -6,8 +6,8 @@ evaluation and final half kick, so an added force goes into f (the next first ha
 it) plus its missing final half kick dt/2 f/m into v: velocity Verlet with the force included.
 Held particles (``fix setforce``) report the force before the setforce (store/force) plus what
 was added; partial prescriptions (a symmetry plane) hold only some components.
-Needs: X, V, F, _store, _added (n, 3); mass (n,); prescribed ids; _partial {id: components}
-(and _driven (n, 3) bool, kept by prescribe);
+Needs: X, V, F, _store, _added (n, 3); mass (n,); prescribed ids; _driven (n, 3) bool (the
+components partial prescriptions hold) and _n_partial (how many there are);
 scene; dt; name; _cmd(text), _group(name, ids); _setup_needed; _state() (the per-atom
 arrays a checkpoint saves) and _after_setup() (refresh views after a setup run).
 
@@ -251,14 +251,10 @@ class VerletArrays:
         ids = np.asarray(ids, int)
         self._setup_needed = True  # fixes added after a run need a setup
         if dofs != "xyz":  # only these components are driven (e.g. a symmetry plane)
-            k = len(self._partial)
+            k, self._n_partial = self._n_partial, self._n_partial + 1
             self._group(f"part{k}", ids)
             comps = " ".join("0.0" if c in dofs else "NULL" for c in "xyz")
             self._cmd(f"fix part{k} part{k} setforce {comps}")
-            for i in ids.tolist():
-                self._partial[i] = ["xyz".index(c) for c in dofs]
-            if getattr(self, "_driven", None) is None or len(self._driven) != len(self.X):
-                self._driven = np.zeros((len(self.X), 3), bool)  # (n, 3): components a setforce holds
             self._driven[np.ix_(ids, ["xyz".index(c) for c in dofs])] = True
             return
         if len(self.prescribed):
@@ -269,15 +265,12 @@ class VerletArrays:
 
     def set_velocities(self, ids: np.ndarray, v: np.ndarray) -> None:
         ids, v = np.asarray(ids, int), np.asarray(v, float).reshape(-1, 3)
-        if not (self._partial and np.isin(ids, list(self._partial)).any()):
+        if not self._n_partial:
             self.V[ids] = v
             return
-        for row, i in enumerate(ids.tolist()):
-            comps = self._partial.get(i)
-            if comps is None:
-                self.V[i] = v[row]
-            else:
-                self.V[i, comps] = v[row, comps]
+        driven = self._driven[ids]
+        written = driven | ~driven.any(axis=1, keepdims=True)  # partial particles: the driven components only
+        self.V[ids] = np.where(written, v, self.V[ids])
 
     def add_forces(self, ids: np.ndarray, F: np.ndarray) -> None:
         """Forces F (k, 3) N added to particles ``ids`` at this step (call from the hook)."""
@@ -288,7 +281,7 @@ class VerletArrays:
         free, Ff = ids[~held], F[~held].copy()
         if self.scene.plane:
             Ff[:, 2] = 0.0
-        if self._partial:
+        if self._n_partial:
             Ff[self._driven[free]] = 0.0  # driven components take no force
         _add_rows(self.F, free, Ff)
         _add_rows(self.V, free, 0.5 * self.dt * Ff / self.mass[free, None])
@@ -317,7 +310,7 @@ class VerletArrays:
         m[self.prescribed] = 0.0
         m[self.scene.groups.get("fixed", np.zeros(0, int))] = 0.0
         V = self.V.copy()
-        if self._partial:
+        if self._n_partial:
             V[self._driven] = 0.0
         return m, V
 
