@@ -134,49 +134,19 @@ def build_specimen(p: dict, a0: float, x_a: float, x_b: float, omega_arm: float,
     rho = p["material.rho"]
     region = make_region(m, p, D, rho, t)
 
-    # DEM window: columns x_a + k d, rows at h -+ 1.5 d (tied) and h -+ 0.5 d (free)
-    cols = x_a + d * np.arange(n_win + 1)
-    rows = h + d * np.array([-1.5, -0.5, 0.5, 1.5])
-    X, Y = np.meshgrid(cols, rows, indexing="ij")
-    x = np.column_stack([X.ravel(), Y.ravel(), np.zeros(X.size)])
-    col, row = np.meshgrid(np.arange(n_win + 1), np.arange(4), indexing="ij")
-    col, row = col.ravel(), row.ravel()
-    idx = lambda c, k: c * 4 + k
-    tied = (row == 0) | (row == 3) | (col == n_win) | ((col == 0) & (x_a > 0))
-    kx = (E11 + G13**2 / E22 - G13) * t
-    ky = (E22 - G13) * t
-    k2 = G13 * t
-    pairs, ks = [], []
-    for c in range(n_win + 1):
-        for k in range(4):
-            if c < n_win:
-                pairs.append((idx(c, k), idx(c + 1, k)))
-                ks.append(kx)
-            if k < 3 and k != 1:  # vertical, not across the mid-plane
-                pairs.append((idx(c, k), idx(c, k + 1)))
-                ks.append(ky)
-            if c < n_win and k < 3 and k != 1:  # diagonals of the cell
-                pairs += [(idx(c, k), idx(c + 1, k + 1)), (idx(c + 1, k), idx(c, k + 1))]
-                ks += [k2, k2]
     K = E22 / d
     Z0, R0 = resolved_strengths(p, d)
-    lower, upper = idx(np.arange(n_win + 1), 1), idx(np.arange(n_win + 1), 2)
-    # the law pairs also go to the engine as placeholder bonds (1e-9 of the law's stiffness),
-    # so that it never adds a contact of its own between them (compression would count twice)
-    pairs += list(zip(lower.tolist(), upper.tolist()))
-    ks += [1e-9 * K * d * t] * len(lower)
+    w = band_window(x_a, n_win, h, d, ((E11 + G13**2 / E22 - G13) * t, (E22 - G13) * t, G13 * t), K * d * t,
+                    tie_first=x_a > 0)
+    x, cols = w.x, w.x[w.lower, 0]
     sphere_rho = rho * d**3 / (4.0 / 3.0 * np.pi * r**3)
-    scene = DemScene(x, r, sphere_rho, np.array(pairs), kn=np.array(ks), ks=0.0, plane=True, young=E22,
-                     groups={"interface": np.flatnonzero(tied)})
+    scene = DemScene(x, r, sphere_rho, w.pairs, kn=w.kn, ks=0.0, plane=True, young=E22,
+                     groups={"interface": np.flatnonzero(w.tied)})
 
     law = HashinCohesiveLaw(K=K, Z0=Z0, R0=R0, GIc=p["interface.GIc"],
                             GIIc=p["interface.GIIc"], eta=p["interface.eta"], mixed_mode=p["interface.mixed_mode"])
-    area = np.full(n_win + 1, d * t)
-    area[[0, -1]] *= 0.5  # end columns carry half a spacing
-    k = np.arange(n_win + 1)
-    along = np.column_stack([np.where(k > 0, k - 1, -1), np.where(k < n_win, k + 1, -1)])
-    bonds = LawBonds(np.column_stack([lower, upper]), x, np.tile([0.0, 1.0, 0.0], (n_win + 1, 1)), area, law,
-                     friction=p["interface.friction"], along=along)
+    bonds = LawBonds(np.column_stack([w.lower, w.upper]), x, np.tile([0.0, 1.0, 0.0], (n_win + 1, 1)),
+                     w.share * d * t, law, friction=p["interface.friction"], along=w.along)
     bonds.damage[cols < a0 - 1e-9 * d] = 1.0  # the initial crack: faces in contact only
     bonds.t_failed[cols < a0 - 1e-9 * d] = 0.0
 
@@ -187,6 +157,58 @@ def build_specimen(p: dict, a0: float, x_a: float, x_b: float, omega_arm: float,
     return Specimen(scene=scene, bonds=bonds, t=t, width_factor=p["geometry.width"] / t,
                     region=region, upper_end=np.flatnonzero(end & above), lower_end=np.flatnonzero(end & ~above),
                     omega_arm=omega_arm)
+
+
+@dataclass
+class BandWindow:
+    """Four rows of particles on a square lattice across a crack plane (module figure):
+    x (n, 3) m; pairs (nb, 2) and kn (nb,) N/m, the engine's bonds (the law pairs as
+    placeholders); tied (n,) bool, the rows inside the FEM and the end columns that face FEM;
+    lower, upper (ncol,) the law pairs across the plane, column by column; along (ncol, 2)
+    their neighbours; share (ncol,) each pair's share of a spacing (1/2 at the ends)."""
+
+    x: np.ndarray
+    pairs: np.ndarray
+    kn: np.ndarray
+    tied: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    along: np.ndarray
+    share: np.ndarray
+
+
+def band_window(x_a: float, n_win: int, y_c: float, d: float, k: tuple[float, float, float], k_law: float,
+                tie_first: bool = True, tie_last: bool = True) -> BandWindow:
+    """Columns x_a + j d (j <= n_win), rows y_c + (-1.5, -0.5, 0.5, 1.5) d; k = (k_x, k_y, k_2)
+    N/m, the closed-form lattice (axial along x and y, two diagonals per cell), none across
+    the plane y_c; k_law N/m, the law pairs' stiffness (they reach the engine at 1e-9 of it,
+    so that it never adds a contact of its own between them: compression would count twice)."""
+    kx, ky, k2 = k
+    col, row = np.meshgrid(np.arange(n_win + 1), np.arange(4), indexing="ij")
+    col, row = col.ravel(), row.ravel()
+    x = np.column_stack([x_a + d * col, y_c + d * (row - 1.5), np.zeros(col.size)])
+    idx = lambda c, j: c * 4 + j
+    tied = (row == 0) | (row == 3) | ((col == n_win) & tie_last) | ((col == 0) & tie_first)
+    pairs, ks = [], []
+    for c in range(n_win + 1):
+        for j in range(4):
+            if c < n_win:
+                pairs.append((idx(c, j), idx(c + 1, j)))
+                ks.append(kx)
+            if j < 3 and j != 1:  # vertical, not across the mid-plane
+                pairs.append((idx(c, j), idx(c, j + 1)))
+                ks.append(ky)
+            if c < n_win and j < 3 and j != 1:  # diagonals of the cell
+                pairs += [(idx(c, j), idx(c + 1, j + 1)), (idx(c + 1, j), idx(c, j + 1))]
+                ks += [k2, k2]
+    c = np.arange(n_win + 1)
+    lower, upper = idx(c, 1), idx(c, 2)
+    pairs += list(zip(lower.tolist(), upper.tolist()))
+    ks += [1e-9 * k_law] * len(lower)
+    share = np.ones(n_win + 1)
+    share[[0, -1]] = 0.5
+    along = np.column_stack([np.where(c > 0, c - 1, -1), np.where(c < n_win, c + 1, -1)])
+    return BandWindow(x, np.array(pairs, int), np.array(ks, float), tied, lower, upper, along, share)
 
 
 def resolved_strengths(p: dict, d: float) -> tuple[float, float]:

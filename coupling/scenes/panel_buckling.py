@@ -48,11 +48,13 @@ from fem_region.modal import lowest_modes
 
 from ..checks import check
 from ..params import Param, density, modulus, positive
+from . import delamination as dl
 from .common import FEM_OPTIONS, FemNodes, fem_only, make_region
+from .coupled_common import COUPLING, coupled_simulation
 
 NAME = "panel_buckling"
 DESCRIPTION = "seed 5.2: delaminated [0_20] panel, local and global buckling loads vs closed forms"
-MODES = ("fem",)
+MODES = ("fem", "coupled")
 PARAMETERS = {
     "material.E11": modulus(139.2e9, "ply modulus along the fibres (Table 2)"),
     "material.E22": modulus(9.72e9, "transverse ply modulus (Table 2)"),
@@ -74,6 +76,25 @@ PARAMETERS = {
                                "(no interpenetration)", kind="bool"),
     "interface.penalty": Param(0.0, "contact stiffness per area; 0 = E22 / (sublaminate element height), "
                                "softened so that it does not lower the elements' stable step", unit="Pa/m", low=0.0),
+    # the delamination's growth (coupled mode): Table 2 gives the strengths, no toughness
+    "interface.Z0": positive(40e6, "interlaminar normal strength (Table 2)", "Pa"),
+    "interface.R0": positive(20e6, "interlaminar shear strength (Table 2)", "Pa"),
+    "interface.GIc": Param(147.0, "mode I toughness (not in Table 2: Table 1's graphite/epoxy)", unit="J/m^2",
+                           low=0.0, open_low=True),
+    "interface.GIIc": Param(526.0, "mode II toughness (not in Table 2: Table 1's graphite/epoxy)", unit="J/m^2",
+                            low=0.0, open_low=True),
+    "interface.eta": Param(2.284, "B-K (or power-law) exponent", low=0.5, high=10.0),
+    "interface.mixed_mode": Param("bk", "mixed-mode criterion", kind="str", choices=("bk", "power")),
+    "interface.cohesive_zone_bonds": Param(20.0, "fewest bonds in the cohesive zone (strengths lowered to "
+                                           "sqrt(9 pi E22 Gc / (32 N d)), Turon et al. 2007); 0 keeps them",
+                                           low=0.0, high=50.0),
+    "interface.friction": Param(0.0, "Coulomb friction of the delaminated faces in the DEM windows", low=0.0,
+                                high=2.0),
+    "particle.radius": positive(0.127e-3, "DEM particle radius r (coupled mode; spacing d = 2 r)", "m"),
+    "dem.window_ahead": positive(6e-3, "DEM window ahead of each tip, into the intact laminate (room to grow)", "m"),
+    "dem.window_behind": positive(2e-3, "DEM window behind each tip, inside the delamination; also where the "
+                                  "film strain gauge stops short of the tips (both modes)", "m"),
+    **COUPLING,
     "mesh.elements_along": Param(148, "elements along the panel", kind="int", low=20),
     "mesh.elements_sublaminate": Param(3, "elements through the sublaminate", kind="int", low=1, high=20),
     "mesh.elements_base": Param(6, "elements through the base laminate", kind="int", low=1, high=40),
@@ -141,20 +162,28 @@ def build(p: dict, mode: str, dem: str):
     H, h = p["geometry.plies"] * tp, n_sub * tp
     yc = H - h  # the delamination plane
     x1, x2 = 0.5 * (L - l), 0.5 * (L + l)
-    xs = np.unique(np.round(np.concatenate([np.linspace(0, L, p["mesh.elements_along"] + 1), [x1, x2]]), 12))
-    ys = np.unique(np.concatenate([np.linspace(0, yc, p["mesh.elements_base"] + 1),
-                                   np.linspace(yc, H, p["mesh.elements_sublaminate"] + 1)]))
-    dx = np.diff(xs).min()
-    m = mesh.cut_rectangle(xs, ys, lambda cx, cy: True, crack_y=yc, crack_x_min=x1, crack_x_max=x2 - 0.5 * dx)
-    # imperfections: the panel's first clamped mode, and the sublaminate's outward bump
-    pts = m.p.copy()
+    dx = L / p["mesh.elements_along"]
+    win = windows(p, x1, x2, h, yc) if mode == "coupled" else []
+    d = 2 * p["particle.radius"]
+    band = d if win else 0.0  # the windows' half-height cut out of the FEM
+    xs = np.linspace(0, L, p["mesh.elements_along"] + 1)
+    for xa, xb in win:  # the windows' own lines; none closer than half an element to their edges
+        xs = xs[(xs < xa - 0.5 * dx) | (xs > xb + 0.5 * dx)]
+        xs = np.concatenate([xs, np.linspace(xa, xb, int(np.ceil((xb - xa) / dx - 1e-9)) + 1)])
+    xs = np.unique(np.round(np.concatenate([xs, [x1, x2]]), 12))
+    ys = np.unique(np.concatenate([np.linspace(0, yc - band, p["mesh.elements_base"] + 1), [yc],
+                                   np.linspace(yc + band, H, p["mesh.elements_sublaminate"] + 1)]))
+    tol = 1e-9 * L
+    in_window = lambda cx, cy: any(xa - tol < cx < xb + tol for xa, xb in win) and abs(cy - yc) < band
+    if win:  # the FEM's crack runs between the windows (its faces' nodes doubled)
+        crack = dict(crack_x_min=win[0][1] - 0.5 * d, crack_x_max=win[1][0] + 0.5 * d)
+    else:
+        crack = dict(crack_x_min=x1, crack_x_max=x2 - 0.5 * np.diff(xs).min())
+    m = mesh.cut_rectangle(xs, ys, lambda cx, cy: not in_window(cx, cy), crack_y=yc, **crack)
     X0 = m.p.copy()
-    pts[1] += p["global.imperfection"] * H * 0.5 * (1 - np.cos(2 * np.pi * X0[0] / L))
     upper = np.zeros(m.p.shape[1], bool)
     upper[np.unique(m.t[:, m.p[1, m.t].mean(axis=0) > yc])] = True
-    inside = upper & (X0[0] > x1) & (X0[0] < x2)
-    pts[1, inside] += p["local.imperfection"] * h * 0.5 * (1 - np.cos(2 * np.pi * (X0[0, inside] - x1) / l))
-    m = type(m)(pts, m.t)
+    m = type(m)(imperfect(p, X0, upper, x1, x2, H, h), m.t)
     C = materials.transversely_isotropic(p["material.E11"], p["material.E22"], p["material.nu12"], 0.4,
                                          p["material.G12"])
     D = materials.reduce(C, 2, p["fem.hypothesis"])
@@ -168,22 +197,41 @@ def build(p: dict, mode: str, dem: str):
     cf = closed_forms(p)
     total = p["load.shortening_factor"] * cf["global_intact"] * L / (p["material.E11"] * H * p["geometry.width"])
     speed = lambda t: -2 * total / T * np.sin(np.pi * t / T) ** 2 if t < T else 0.0  # integrates to -total
-    dyn = ExplicitDynamics(region, supports=[PrescribedMotion(clamp), PrescribedMotion(right * 2, speed)],
-                           alpha=2 * omega1)
-    contact = face_contact(p, dyn, X0, upper, yc, h) if p["interface.contact"] else None
-    mid = np.abs(X0[0] - L / 2) < 0.5 * dx
+    contacts = []
+
+    def make_fem(extra_mass=None):
+        dyn = ExplicitDynamics(region, supports=[PrescribedMotion(clamp), PrescribedMotion(right * 2, speed)],
+                               alpha=2 * omega1, extra_mass=extra_mass)
+        if p["interface.contact"]:
+            contacts.append(face_contact(p, dyn, X0, upper, yc, h))
+        return dyn
+
+    bonds = None
+    if win:
+        scene, bonds = window_scene(p, win, D, x1, x2, yc, H, h)
+        sim, clock = coupled_simulation(p, make_fem, scene, dem, T, models=(bonds,))
+        dyn = clock.fem
+    else:
+        dyn = make_fem()
+    contact = contacts[-1] if contacts else None
+    mid = np.abs(X0[0] - L / 2) < 0.5 * np.diff(xs).min()
     point_a = np.flatnonzero(mid & (np.abs(X0[1] - H) < 1e-9 * H))[:1]
     point_b = np.flatnonzero(mid & (X0[1] < 1e-9 * H))[:1]
     probes = {"axial_force": lambda: -float(dyn.f_int[right, 0].sum()) if hasattr(dyn, "f_int") else 0.0,
               "end_shortening": lambda: -float(dyn.state.u[right, 0].mean()),
               "deflection_A": lambda: float(X[point_a, 1][0] + dyn.state.u[point_a, 1][0] - X0[1, point_a][0]),
               "deflection_B": lambda: float(X[point_b, 1][0] + dyn.state.u[point_b, 1][0] - X0[1, point_b][0])}
-    # the sublaminate's membrane strain: mean of its two faces' arc lengths over the delaminated
-    # span (bending strains cancel) against l
-    span = (X0[0] >= x1 - 1e-9 * L) & (X0[0] <= x2 + 1e-9 * L)
-    top_face = np.flatnonzero(span & (np.abs(X0[1] - H) < 1e-9 * H))
-    crack_face = np.flatnonzero(span & upper & (np.abs(X0[1] - yc) < 1e-9 * H))
+    # the sublaminate's membrane strain: mean of its two faces' arc lengths (bending strains
+    # cancel) over a gauge that stops dem.window_behind short of the tips (FEM in both modes;
+    # the membrane force of a film without face tractions is the same all along it)
+    g1, g2 = x1 + p["dem.window_behind"], x2 - p["dem.window_behind"]
+    gauge = (X0[0] >= g1 - 1e-9 * L) & (X0[0] <= g2 + 1e-9 * L)
+    top_face = np.flatnonzero(gauge & (np.abs(X0[1] - H) < 1e-9 * H))
+    crack_face = np.flatnonzero(gauge & upper & (np.abs(X0[1] - yc) < 1e-9 * H))
     faces = [f[np.argsort(X0[0, f])] for f in (top_face, crack_face)]
+    if not all(len(f) > 1 and np.array_equal(X0[0, f], X0[0, faces[0]]) for f in faces):
+        raise CaseError(f"dem.window_behind = {p['dem.window_behind']:g}: the film gauge needs FEM crack faces "
+                        f"between the windows; allowed below {0.45 * l:g} m")
 
     def film_strain():
         x = X + dyn.state.u
@@ -193,16 +241,99 @@ def build(p: dict, mode: str, dem: str):
     if contact is not None:  # N, the faces pressed together; m, their deepest overlap
         probes["contact_force"] = lambda: float(np.sum(np.maximum(-contact.traction[:, 1], 0.0) * contact.area))
         probes["interpenetration"] = lambda: float(max(-contact.delta[:, 1].min(), 0.0))
-    sim = fem_only(dyn, p, T, probes)
+    if bonds is not None:
+        probes.update(growth_probes(bonds, x1, x2))
+        sim.probes.update(probes)
+        sim.counts["law_bonds"] = len(bonds.pairs)
+        e_run = clock.energies
+    else:
+        sim = fem_only(dyn, p, T, probes)
+        e_run = dyn.energies
     if contact is not None:
-        e_fem = dyn.energies
-
         def energies():
-            e = dict(e_fem())
+            e = dict(e_run())
             e["internal"] += contact.stored_energy()
             return e
         sim.energies = energies
     return sim
+
+
+def imperfect(p: dict, X: np.ndarray, upper: np.ndarray, x1: float, x2: float, H: float, h: float) -> np.ndarray:
+    """(2, n) positions X (2, n) m moved by the imperfections: the panel's clamped first mode of
+    global.imperfection x H, and the sublaminate's (``upper``) outward bump of
+    local.imperfection x h between the tips."""
+    L = p["geometry.length"]
+    pts = X.copy()
+    pts[1] += p["global.imperfection"] * H * 0.5 * (1 - np.cos(2 * np.pi * X[0] / L))
+    inside = upper & (X[0] > x1) & (X[0] < x2)
+    pts[1, inside] += p["local.imperfection"] * h * 0.5 * (1 - np.cos(2 * np.pi * (X[0, inside] - x1) / (x2 - x1)))
+    return pts
+
+
+def windows(p: dict, x1: float, x2: float, h: float, yc: float) -> list[tuple[float, float]]:
+    """[(x_a, x_b)] m of the two DEM windows, whole particle spacings d, each tip on a column:
+    dem.window_ahead into the intact laminate and dem.window_behind into the delamination."""
+    from ..params import CaseError
+    d = 2 * p["particle.radius"]
+    if 2 * d > h or 2 * d > yc:
+        raise CaseError(f"particle.radius = {p['particle.radius']:g}: the band (four rows, 4 r = {2 * d:g} m across "
+                        f"the plane) needs the sublaminate and the base thicker than it; allowed <= {min(h, yc) / 4:g} m")
+    n_out = max(2, int(round(p["dem.window_ahead"] / d)))
+    n_in = max(2, int(round(p["dem.window_behind"] / d)))
+    if x1 - n_out * d < 0.5 * x1 or x1 + n_in * d >= 0.5 * (x1 + x2) - d:
+        raise CaseError(f"dem.window_ahead = {p['dem.window_ahead']:g}, dem.window_behind = {p['dem.window_behind']:g}: "
+                        f"the windows must stay in the clamps' half of the intact ends and apart; allowed ahead <= "
+                        f"{0.5 * x1:g} m, behind < {0.45 * (x2 - x1):g} m")
+    return [(x1 - n_out * d, x1 + n_in * d), (x2 - n_in * d, x2 + n_out * d)]
+
+
+def window_scene(p: dict, win, D: np.ndarray, x1: float, x2: float, yc: float, H: float, h: float):
+    """(DemScene, LawBonds): the two windows' four-row bands (delamination.band_window) on the
+    imperfect geometry, the lattice of the FEM's slice moduli over the panel's width, and the
+    seed's Hashin law across the plane (debonded inside the delamination, finite rotation: the
+    tips turn with the panel's bow by more than the film's critical strain)."""
+    from dem_region.ply_lattice import lattice_stiffness, slice_moduli
+    from dem_region.scene import DemScene
+    r, b, rho = p["particle.radius"], p["geometry.width"], p["material.rho"]
+    d = 2 * r
+    E_x, E_y, G = slice_moduli(D)
+    K = E_y / d
+    k = lattice_stiffness(E_x, E_y, G, b)
+    parts = [dl.band_window(xa, int(round((xb - xa) / d)), yc, d, k, K * d * b) for xa, xb in win]
+    off = np.cumsum([0] + [len(w.x) for w in parts])
+    x = np.vstack([w.x for w in parts])
+    x[:, :2] = imperfect(p, x[:, :2].T, x[:, 1] > yc, x1, x2, H, h).T
+    cat = lambda f: np.concatenate([f(w, o) for w, o in zip(parts, off)])
+    pairs = cat(lambda w, o: w.pairs + o)
+    sphere_rho = rho * d**2 * b / (4.0 / 3.0 * np.pi * r**3)  # a particle stands for d x d x the width
+    scene = DemScene(x, r, sphere_rho, pairs, kn=cat(lambda w, o: w.kn), ks=0.0, plane=True, young=E_y,
+                     groups={"interface": cat(lambda w, o: np.flatnonzero(w.tied) + o)}, placeholder_bonds=False)
+    Z0, R0 = dl.resolved_strengths(p, d)
+    law = HashinCohesiveLaw(K=K, Z0=Z0, R0=R0, GIc=p["interface.GIc"], GIIc=p["interface.GIIc"],
+                            eta=p["interface.eta"], mixed_mode=p["interface.mixed_mode"])
+    lower, upper = cat(lambda w, o: w.lower + o), cat(lambda w, o: w.upper + o)
+    n0 = np.concatenate([[0], np.cumsum([len(w.lower) for w in parts])])
+    along = np.vstack([np.where(w.along >= 0, w.along + n0[i], -1) for i, w in enumerate(parts)])
+    bonds = LawBonds(np.column_stack([lower, upper]), x, np.tile([0.0, 1.0, 0.0], (len(lower), 1)),
+                     cat(lambda w, o: w.share) * d * b, law, friction=p["interface.friction"], along=along,
+                     finite_rotation=True, label="delamination")
+    xb = x[lower, 0]
+    inside = (xb > x1 + 1e-9 * d) & (xb < x2 - 1e-9 * d)
+    bonds.damage[inside], bonds.t_failed[inside] = 1.0, 0.0  # the delamination: faces in contact only
+    return scene, bonds
+
+
+def growth_probes(bonds: LawBonds, x1: float, x2: float) -> dict:
+    """m, how far each tip has run into the intact laminate (fully debonded pairs beyond it),
+    and J, the interface's dissipation (the initial delamination's bonds start debonded)."""
+    xb = bonds.X[bonds.pairs[:, 0], 0]
+
+    def run(side):
+        failed = bonds.failed()
+        ahead = failed & ((xb < x1) if side < 0 else (xb > x2))
+        return float(np.max(np.where(side < 0, x1 - xb, xb - x2)[ahead])) if ahead.any() else 0.0
+    return {"growth_left": lambda: run(-1), "growth_right": lambda: run(+1),
+            "interface_dissipated": bonds.dissipated_energy}
 
 
 def face_contact(p: dict, dyn: ExplicitDynamics, X0: np.ndarray, upper: np.ndarray, yc: float,
