@@ -93,3 +93,42 @@ def hoffman_ply(stress, axes, scale, k):
                   + (1 / Xt - 1 / Xc) * s1 + (1 / Yt - 1 / Yc) * s2 + (1 / Zt - 1 / Zc) * s3
                   + (t23 / S23) ** 2 + (t13 / S13) ** 2 + (t12 / S12) ** 2)
     return out
+
+
+@njit(cache=True)
+def corotate_2d(x, loc, a, b, s0, d0, local, rot, chord):
+    """Each bond's branch vector in the frame turned by the angle theta of the chord s from
+    bond a's midpoint to bond b's (reference chord s0), into local (nb, 3) m; rot (nb, 2) the
+    cos, sin of theta; chord (nb, 3) s. Returns delta = local - d0 (nb, 3) m."""
+    nb = loc.shape[0]
+    delta = np.empty((nb, 3))
+    for m in range(nb):
+        for k in range(2):
+            chord[m, k] = 0.5 * (x[loc[b[m], 0], k] + x[loc[b[m], 1], k] - x[loc[a[m], 0], k] - x[loc[a[m], 1], k])
+        chord[m, 2] = 0.0
+        th = np.arctan2(s0[m, 0] * chord[m, 1] - s0[m, 1] * chord[m, 0], s0[m, 0] * chord[m, 0] + s0[m, 1] * chord[m, 1])
+        c, s = np.cos(th), np.sin(th)
+        dx = x[loc[m, 1], 0] - x[loc[m, 0], 0]
+        dy = x[loc[m, 1], 1] - x[loc[m, 0], 1]
+        local[m, 0] = c * dx + s * dy
+        local[m, 1] = -s * dx + c * dy
+        local[m, 2] = x[loc[m, 1], 2] - x[loc[m, 0], 2]
+        rot[m, 0], rot[m, 1] = c, s
+        for k in range(3):
+            delta[m, k] = local[m, k] - d0[m, k]
+    return delta
+
+
+@njit(cache=True)
+def add_spin_forces(f, loc, a, b, t, local, chord, area):
+    """The corotated frame's share of the forces into f (n, 3) N: A dPsi/dtheta dtheta/ds, half
+    on each particle of the next pair b (minus) and of the previous pair a (plus)."""
+    for m in range(loc.shape[0]):
+        M = area[m] * (t[m, 0] * local[m, 1] - t[m, 1] * local[m, 0])
+        q = 0.5 * M / (chord[m, 0] ** 2 + chord[m, 1] ** 2)
+        gx, gy = -q * chord[m, 1], q * chord[m, 0]
+        for k in range(2):
+            f[loc[b[m], k], 0] -= gx
+            f[loc[b[m], k], 1] -= gy
+            f[loc[a[m], k], 0] += gx
+            f[loc[a[m], k], 1] += gy

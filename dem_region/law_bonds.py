@@ -163,19 +163,15 @@ class LawBonds:
             self._axis = d / L[:, None]
             return (L - self._L0)[:, None] * self.normal
         a, b = self._dirs[0][:2]
-        mid = 0.5 * (x[i] + x[j])
-        s, s0 = mid[b] - mid[a], self._s0
-        theta = np.arctan2(s0[:, 0] * s[:, 1] - s0[:, 1] * s[:, 0], s0[:, 0] * s[:, 0] + s0[:, 1] * s[:, 1])
-        c, sn = np.cos(theta), np.sin(theta)
-        self._local = np.column_stack([c * d[:, 0] + sn * d[:, 1], -sn * d[:, 0] + c * d[:, 1], d[:, 2]])
-        self._rot, self._chord = (c, sn), s
-        return self._local - self.d0
+        nb = len(self.pairs)
+        self._local, self._rot, self._chord = np.empty((nb, 3)), np.empty((nb, 2)), np.empty((nb, 3))
+        return kernels.corotate_2d(x, self._loc, a, b, self._s0, self.d0, self._local, self._rot, self._chord)
 
     def _to_global(self, t: np.ndarray) -> np.ndarray:
         """Tractions (nb, 3) of the corotated frames turned back to x, y, z."""
         if self.along is None:
             return np.einsum("bi,bi->b", t, self.normal)[:, None] * self._axis
-        c, sn = self._rot
+        c, sn = self._rot.T
         return np.column_stack([c * t[:, 0] - sn * t[:, 1], sn * t[:, 0] + c * t[:, 1], t[:, 2]])
 
     def _add_spin_forces(self, f: np.ndarray) -> None:
@@ -184,11 +180,7 @@ class LawBonds:
         dtheta/ds = (-s_y, s_x) / |s|^2 on the chord s from the previous pair's midpoint to the
         next's, half on each particle of those pairs (force = minus the gradient)."""
         a, b = self._dirs[0][:2]
-        t, l, s = self.traction, self._local, self._chord
-        M = self.area * (t[:, 0] * l[:, 1] - t[:, 1] * l[:, 0])
-        g = (0.5 * M / np.einsum("bi,bi->b", s, s))[:, None] * np.column_stack([-s[:, 1], s[:, 0], np.zeros(len(s))])
-        rows = np.concatenate([self._loc[b, 0], self._loc[b, 1], self._loc[a, 0], self._loc[a, 1]])
-        kernels.add_rows(f, rows, np.concatenate([-g, -g, g, g]))
+        kernels.add_spin_forces(f, self._loc, a, b, self.traction, self._local, self._chord, self.area)
 
     def apply(self, backend, dt: float) -> None:
         """Read the bonded particles from the engine, evaluate, add the bond forces."""

@@ -28,6 +28,9 @@ class TransitionInterface:
     W: sp.csr_matrix
     dim: int
 
+    def __post_init__(self):
+        self._WT = self.W.T.tocsr()  # the transpose map, built once (scipy makes a new one per .T)
+
     @classmethod
     def build(cls, region: FemRegion, x: np.ndarray, ids: np.ndarray, tol: float = 1e-9) -> "TransitionInterface":
         """Host particles ``ids`` at positions x (n, 3) m in the elements of ``region``."""
@@ -79,8 +82,8 @@ class TransitionInterface:
 
     def to_nodes(self, F: np.ndarray) -> np.ndarray:
         """F (k, 3) N on the particles -> (n_nodes, dim) N on the nodes (transpose map)."""
-        return self.W.T @ F[:, : self.dim]
+        return self._WT @ F[:, : self.dim]
 
     def share_mass(self, m: np.ndarray) -> np.ndarray:
         """m (k,) kg of the interface particles -> (n_nodes,) kg added to the nodes."""
-        return self.W.T @ m
+        return self._WT @ m

@@ -277,7 +277,7 @@ class VerletArrays:
         ids, F = np.asarray(ids, int), np.asarray(F, float).reshape(-1, 3)
         _add_rows(self._added, ids, F)
         # held: the interface (written velocities) and the fixed group (clamps) take no motion
-        held = np.isin(ids, self.prescribed) | np.isin(ids, self.scene.groups.get("fixed", np.zeros(0, int)))
+        held = self._held_mask()[ids]
         free, Ff = ids[~held], F[~held].copy()
         if self.scene.plane:
             Ff[:, 2] = 0.0
@@ -285,6 +285,15 @@ class VerletArrays:
             Ff[self._driven[free]] = 0.0  # driven components take no force
         _add_rows(self.F, free, Ff)
         _add_rows(self.V, free, 0.5 * self.dt * Ff / self.mass[free, None])
+
+    def _held_mask(self) -> np.ndarray:
+        """(n,) bool: the fully prescribed set and the fixed group (rebuilt when the set changes)."""
+        if getattr(self, "_held_for", None) is not self.prescribed:
+            held = np.zeros(len(self.mass), bool)
+            held[self.prescribed] = True
+            held[self.scene.groups.get("fixed", np.zeros(0, int))] = True
+            self._held, self._held_for = held, self.prescribed
+        return self._held
 
     def forces(self, ids: np.ndarray) -> np.ndarray:
         """(k, 3) N: the engine's force before any setforce, plus what was added this step."""
