@@ -183,36 +183,37 @@ def test_panel_buckling_coarse(femdem):
 
 def test_panel_buckling_coupled_equals_fem_before_buckling(femdem, tmp_path):
     """Seed 5.2 coupled (DEM windows at both tips, LIGGGHTS) against the all-FEM panel up to a
-    third of the local buckling load: the same axial force, film strain and end shortening
-    within 1 % (the windows and the tie add no compliance; the debonded bonds inside the
-    delamination carry nothing in tension)."""
+    sixth of the local buckling load: the same axial force, film strain and end shortening
+    within 0.5 % (measured: 1e-4, 1e-3, 1e-4; the windows and the tie add no compliance, the
+    debonded bonds inside the delamination carry nothing in tension)."""
     runs = {}
     for mode in ("fem", "coupled"):
         code, s, err = femdem("run", "panel_buckling_coarse", "--mode", mode, "--dem", "liggghts",
-                              "--set=clock.t_end=0.9e-3")
+                              "--set=clock.t_end=0.7e-3")
         assert code == 0, err
         runs[mode] = s
     import h5py
     h = {m: h5py.File(tmp_path / f"run{k}" / "history.h5")["history"] for k, m in enumerate(runs)}
     for key in ("axial_force", "film_strain", "end_shortening"):
         f, c = h["fem"][key][-1], h["coupled"][key][-1]
-        assert abs(c / f - 1) < 0.01, (key, f, c)
+        assert abs(c / f - 1) < 0.005, (key, f, c)
     assert runs["coupled"]["qoi"]["delamination_growth_left"] == 0.0
 
 
 @pytest.mark.slow
 def test_panel_buckling_coarse_coupled_growth(femdem):
-    """Seed 5.2 coupled with growth: the film and the panel buckle at their closed-form loads
-    (the global one for the delamination length at the limit load), the delamination grows
-    from both tips alike (symmetry) and the interface dissipates between GIc and GIIc per new
-    area."""
+    """Seed 5.2 coupled with growth (about 3 minutes): the film and the panel buckle at their
+    closed-form loads (the global one for the delamination length at the limit load), growth
+    starts where Hutchinson & Suo put it for the measured mode mix, the interface dissipates
+    between GIc and GIIc per new area (the scene's checks), and both tips grow alike
+    (symmetry)."""
     code, s, err = femdem("run", "panel_buckling_coarse", "--mode", "coupled", "--dem", "liggghts")
     assert code == 0, err
     assert_checks(s)
     q = s["qoi"]
+    assert {"growth_onset_load", "dissipated_per_new_area", "growth_not_window_limited"} <= set(q) | set(s["checks"])
     assert q["delamination_growth_left"] > 0
     assert q["delamination_growth_left"] == pytest.approx(q["delamination_growth_right"], abs=2 * 0.254e-3)
-    assert 147.0 <= q["dissipated_per_new_area"] <= 526.0
 
 
 def test_stepped_column_reduces_to_euler_and_engesser():
