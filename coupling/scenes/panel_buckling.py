@@ -43,7 +43,7 @@ delamination and dem.window_ahead into the intact laminate. Across the plane the
 Hashin law with linear softening (Z0, R0 of Table 2; Gc not in Table 2: Table 1's
 graphite/epoxy GIc = 147, GIIc = 526 J/m^2, B-K), debonded inside the delamination (contact
 only), intact ahead, in corotated kinematics (LawBonds finite_rotation): the panel's bow turns
-the tips by 0.05-0.1 rad, whose theta^2 / 2 is the film's critical strain. The delamination
+the tips by 0.04-0.11 rad, whose theta^2 / 2 is the film's critical strain. The delamination
 grows from both tips once the energy release rate of the buckled film reaches the mixed-mode
 toughness; the growth onset is checked against Hutchinson & Suo with the measured mode mix,
 the global load against the stepped column with the delamination length at the limit load.
