@@ -101,6 +101,8 @@ def test_unit_slips_are_caught(femdem, setting, words):
     ("rod_impact_coarse", ["--set=fem.integration=selective"], ["fem.integration", "allowed"]),
     ("rod_impact_coarse", ["--mode", "dem"], ["--mode dem", "fem, coupled"]),
     ("rod_impact_coarse", ["--mode", "coupled", "--set=dem.particle_size=0.005"], ["dem.particle_size", "divide"]),
+    ("panel_buckling_coarse", ["--mode", "coupled", "--set=dem.window_ahead=0.03"], ["dem.window_ahead", "allowed"]),
+    ("panel_buckling_coarse", ["--mode", "coupled", "--set=particle.radius=2e-4"], ["particle.radius", "allowed"]),
 ])
 def test_bad_input_of_the_seed_scenes(femdem, case, args, words):
     code, summary, err = femdem("run", case, *args)
