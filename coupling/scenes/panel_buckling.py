@@ -206,7 +206,19 @@ def build(p: dict, mode: str, dem: str):
             contacts.append(face_contact(p, dyn, X0, upper, yc, h))
         return dyn
 
-    bonds = None
+    # the sublaminate's membrane strain: mean of its two faces' arc lengths (bending strains
+    # cancel) over a gauge that stops dem.window_behind short of the tips (FEM in both modes;
+    # the membrane force of a film without face tractions is the same all along it)
+    g1, g2 = x1 + p["dem.window_behind"], x2 - p["dem.window_behind"]
+    gauge = (X0[0] >= g1 - 1e-9 * L) & (X0[0] <= g2 + 1e-9 * L)
+    top_face = np.flatnonzero(gauge & (np.abs(X0[1] - H) < 1e-9 * H))
+    crack_face = np.flatnonzero(gauge & upper & (np.abs(X0[1] - yc) < 1e-9 * H))
+    faces = [f[np.argsort(X0[0, f])] for f in (top_face, crack_face)]
+    if not all(len(f) > 1 and np.array_equal(X0[0, f], X0[0, faces[0]]) for f in faces):
+        raise CaseError(f"dem.window_behind = {p['dem.window_behind']:g}: the film gauge needs FEM crack faces "
+                        f"between the windows; allowed below {0.45 * l:g} m")
+
+    bonds = None  # (every input checked above: no engine starts for a refused case)
     if win:
         scene, bonds = window_scene(p, win, D, x1, x2, yc, H, h)
         sim, clock = coupled_simulation(p, make_fem, scene, dem, T, models=(bonds,))
@@ -221,17 +233,6 @@ def build(p: dict, mode: str, dem: str):
               "end_shortening": lambda: -float(dyn.state.u[right, 0].mean()),
               "deflection_A": lambda: float(X[point_a, 1][0] + dyn.state.u[point_a, 1][0] - X0[1, point_a][0]),
               "deflection_B": lambda: float(X[point_b, 1][0] + dyn.state.u[point_b, 1][0] - X0[1, point_b][0])}
-    # the sublaminate's membrane strain: mean of its two faces' arc lengths (bending strains
-    # cancel) over a gauge that stops dem.window_behind short of the tips (FEM in both modes;
-    # the membrane force of a film without face tractions is the same all along it)
-    g1, g2 = x1 + p["dem.window_behind"], x2 - p["dem.window_behind"]
-    gauge = (X0[0] >= g1 - 1e-9 * L) & (X0[0] <= g2 + 1e-9 * L)
-    top_face = np.flatnonzero(gauge & (np.abs(X0[1] - H) < 1e-9 * H))
-    crack_face = np.flatnonzero(gauge & upper & (np.abs(X0[1] - yc) < 1e-9 * H))
-    faces = [f[np.argsort(X0[0, f])] for f in (top_face, crack_face)]
-    if not all(len(f) > 1 and np.array_equal(X0[0, f], X0[0, faces[0]]) for f in faces):
-        raise CaseError(f"dem.window_behind = {p['dem.window_behind']:g}: the film gauge needs FEM crack faces "
-                        f"between the windows; allowed below {0.45 * l:g} m")
 
     def film_strain():
         x = X + dyn.state.u
