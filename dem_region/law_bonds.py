@@ -109,6 +109,9 @@ class LawBonds:
             if self.along is not None:
                 a, b = self._dirs[0][:2]
                 self._s0 = mid[b] - mid[a]  # reference chord of the neighbour pairs
+                # the current frame, rewritten in place each step: corotated branch vectors,
+                # cos / sin of the turn, chord
+                self._local, self._rot, self._chord = np.empty((nb, 3)), np.empty((nb, 2)), np.empty((nb, 3))
             self._L0 = np.linalg.norm(self.d0, axis=1)
         if hasattr(self.law, "initiate"):
             if self.volume is None:
@@ -163,8 +166,6 @@ class LawBonds:
             self._axis = d / L[:, None]
             return (L - self._L0)[:, None] * self.normal
         a, b = self._dirs[0][:2]
-        nb = len(self.pairs)
-        self._local, self._rot, self._chord = np.empty((nb, 3)), np.empty((nb, 2)), np.empty((nb, 3))
         return kernels.corotate_2d(x, self._loc, a, b, self._s0, self.d0, self._local, self._rot, self._chord)
 
     def _to_global(self, t: np.ndarray) -> np.ndarray:
