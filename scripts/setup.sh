@@ -13,7 +13,7 @@ SUDO=""; [ "$(id -u)" = 0 ] || SUDO=sudo
 
 DEB_PACKAGES=(yade python3-yade liggghts libliggghts-dev openmpi-bin libopenmpi-dev
   python3-mpi4py python3-venv python3-pip python3-numpy python3-scipy python3-h5py
-  python3-matplotlib python3-tqdm python3-pytest python3-hypothesis procps)
+  python3-matplotlib python3-tqdm python3-pytest python3-pytest-xdist python3-hypothesis procps)
 
 missing=()
 for p in "${DEB_PACKAGES[@]}"; do
