@@ -60,7 +60,6 @@ def test_beam_impact_3d_coarse(femdem):
     assert 0.0 <= q["damage_at_zone_edge"] <= 1.0
 
 
-@pytest.mark.slow
 def test_beam_impact_3d_coupled_equals_fem_when_elastic(femdem):
     """3D, damage out of reach, to past the peak: the coupled strip (lattice + Hex8, tied on
     a face) and the all-Hex8 strip give the same peak centre deflection within 3 %."""
