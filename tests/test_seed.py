@@ -190,7 +190,7 @@ def test_panel_buckling_coupled_equals_fem_before_buckling(femdem, tmp_path):
     runs = {}
     for mode in ("fem", "coupled"):
         code, s, err = femdem("run", "panel_buckling_coarse", "--mode", mode, "--dem", "liggghts",
-                              "--set=clock.t_end=0.5e-3")
+                              "--set=clock.t_end=0.5e-3", "--set=load.duration_periods=16")
         assert code == 0, err
         runs[mode] = s
     import h5py
