@@ -226,3 +226,16 @@ def test_stepped_column_reduces_to_euler_and_engesser():
     assert stepped_column_load(EI, EI, L, 0.4, 0.0, 3 * PE) == pytest.approx(PE, rel=1e-9)
     assert stepped_column_load(EI, EI, L, 0.4, 0.0, 3 * PE, 300.0, 300.0) == pytest.approx(PE / (1 + PE / 300), rel=1e-9)
     assert stepped_column_load(EI, 0.5 * EI, L, 0.4, 0.0, 3 * PE) < PE
+
+
+def test_film_closed_form_tends_to_rigid_clamps_for_a_stiff_ply():
+    """The film's closed form with its tips' root rotation and shear lies below the rigid-clamp
+    thin film and reaches it as G12 grows (chi h -> 0 and Engesser's term -> 0); a thicker film
+    (larger chi h / l) falls further below it."""
+    from coupling.case import load_case
+    from coupling.scenes.panel_buckling import closed_forms
+    p = load_case("panel_buckling", {}).parameters
+    ratio = lambda q: (lambda cf: cf["local"] / cf["local_clamped"])(closed_forms(q))
+    assert ratio(p) < 1
+    assert ratio({**p, "material.G12": 1e6 * p["material.G12"]}) == pytest.approx(1, rel=5e-3)
+    assert ratio({**p, "geometry.sublaminate_plies": 8}) < ratio(p)
