@@ -134,8 +134,9 @@ PARAMETERS = {
 
 
 def closed_forms(p: dict) -> dict:
-    """N: local (thin film), global of the intact panel (Euler) and global of the delaminated
-    panel once the film has buckled (stepped column)."""
+    """N: local (thin film: with its tips' root rotation and shear, and with rigid clamps),
+    global of the intact panel (Euler) and global of the delaminated panel once the film has
+    buckled (stepped column)."""
     E, b, tp = p["material.E11"], p["geometry.width"], p["geometry.ply_thickness"]
     H, h = p["geometry.plies"] * tp, p["geometry.sublaminate_plies"] * tp
     l, L = p["geometry.delamination_length"], p["geometry.length"]
