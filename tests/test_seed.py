@@ -172,8 +172,9 @@ def test_rod_impact_bad_settings_are_caught(femdem):
 
 def test_panel_buckling_coarse(femdem):
     """Seed 5.2, coarse: the pre-buckling axial stiffness is E11 H b / L within 2 %; the 0_4
-    film buckles at the thin-film load and the panel at the delaminated (stepped) column's
-    load, each within 10 % of the closed form for this geometry; the film goes first; the
+    film buckles at the thin-film load (its tips turning as a DCB arm's root, with shear) and
+    the panel at the delaminated (stepped) column's load, each within 10 % of the closed form
+    for this geometry; the film goes first; the
     delaminated faces never interpenetrate (contact)."""
     code, s, err = femdem("run", "panel_buckling_coarse")
     assert code == 0, err
