@@ -23,7 +23,7 @@ Closed forms (from the run's parameters):
   eps_c = e / (1 + E11 e / (kappa G12)), e = (pi^2 / 3) (h / (l + 2 chi h))^2. The rigid-clamp
   value is reported beside it (``closed_form_local_clamped``). Measured on the full mesh,
   all-FEM, ramps of 32 / 64 / 128 periods: 5.62 / 5.41 / 5.30 kN, approaching the corrected
-  5.22 kN as the ramp slows (the rigid-clamp 5.88 kN is left behind);
+  5.23 kN as the ramp slows (the rigid-clamp 5.88 kN is left behind);
 - global: once the film has buckled it holds about its critical force and the 0_16 base alone
   bends in the middle half. The panel then buckles as a clamped stepped column (Timoshenko &
   Gere 2.10: intact ends EI(H), the base EI(H - h) in the middle carrying P minus the film's
@@ -140,12 +140,13 @@ def closed_forms(p: dict) -> dict:
     E, b, tp = p["material.E11"], p["geometry.width"], p["geometry.ply_thickness"]
     H, h = p["geometry.plies"] * tp, p["geometry.sublaminate_plies"] * tp
     l, L = p["geometry.delamination_length"], p["geometry.length"]
+    kG = 5.0 / 6.0 * p["material.G12"]  # Pa, Engesser's shear flexibility (kappa = 5/6)
     eps_clamped = np.pi**2 / 3 * (h / l) ** 2
     # the film's ends turn as a DCB arm's root does: each tip moves chi h into the laminate
     e_root = np.pi**2 / 3 * (h / (l + 2 * dl.chi({**p, "material.G13": p["material.G12"]}) * h)) ** 2
-    eps_c = e_root / (1 + E * e_root / (5.0 / 6.0 * p["material.G12"]))  # Engesser, the film's shear
+    eps_c = e_root / (1 + E * e_root / kG)
     euler = 4 * np.pi**2 * E * (b * H**3 / 12) / L**2
-    kGA = 5.0 / 6.0 * p["material.G12"] * b  # N per unit thickness: Engesser's shear flexibility
+    kGA = kG * b  # N per unit thickness
     return {"local": E * H * b * eps_c, "local_clamped": E * H * b * eps_clamped,
             "global_intact": euler, "global_intact_shear": euler / (1 + euler / (kGA * H)),
             "global": stepped_column_load(E * b * H**3 / 12, E * b * (H - h) ** 3 / 12, L, l, E * h * b * eps_c, euler,
