@@ -30,6 +30,20 @@ def add_rows(target, ids, F):
 
 
 @njit(cache=True)
+def add_held_forces(added, F, V, rows, G, takes, half_dt, mass):
+    """Added forces G (k, 3) N on engine rows (k,): all into ``added`` (what ``forces``
+    reports), and the components that move (takes (k, 3) bool) into the engine's force F and,
+    for their missing final half kick, velocity V += (dt / 2) G / m (mass (k,) kg)."""
+    for r in range(rows.shape[0]):
+        p = rows[r]
+        for k in range(3):
+            added[p, k] += G[r, k]
+            if takes[r, k]:
+                F[p, k] += G[r, k]
+                V[p, k] += half_dt * G[r, k] / mass[r]
+
+
+@njit(cache=True)
 def add_slope_forces(f, loc, normal, q, a, b):
     """The work-conjugate forces of an interface slip's slope term, into f (n, 3) N: each
     bond's q (nb,) N acts along the normal of its neighbour pairs, -q on both particles of
@@ -66,32 +80,72 @@ def bond_stress(loc, force, d0, cell, n):
 
 
 @njit(cache=True)
+def hoffman_coefficients(k):
+    """The Hoffman index's nine coefficients from the strengths k = (Xt, Xc, Yt, Yc, Zt, Zc,
+    S23, S13, S12) Pa: three quadratic, three linear, the three shear strengths."""
+    Xt, Xc, Yt, Yc, Zt, Zc, S23, S13, S12 = k
+    X, Y, Z = 1 / (Xt * Xc), 1 / (Yt * Yc), 1 / (Zt * Zc)
+    return (0.5 * (Y + Z - X), 0.5 * (Z + X - Y), 0.5 * (X + Y - Z),
+            1 / Xt - 1 / Xc, 1 / Yt - 1 / Yc, 1 / Zt - 1 / Zc, S23, S13, S12)
+
+
+@njit(cache=True)
+def hoffman_bond(stress, scale, R, c):
+    """Hoffman index of one global Voigt stress (6,) Pa / scale, in the ply axes R (3, 3)
+    (columns); c = hoffman_coefficients(strengths)."""
+    q23, q31, q12, l1, l2, l3, S23, S13, S12 = c
+    xx, yy, zz, yz, xz, xy = (stress[0] / scale, stress[1] / scale, stress[2] / scale,
+                              stress[3] / scale, stress[4] / scale, stress[5] / scale)
+    s1, s2, s3 = _turned(R, xx, yy, zz, yz, xz, xy, 0, 0), _turned(R, xx, yy, zz, yz, xz, xy, 1, 1), \
+        _turned(R, xx, yy, zz, yz, xz, xy, 2, 2)
+    t23, t13, t12 = _turned(R, xx, yy, zz, yz, xz, xy, 1, 2), _turned(R, xx, yy, zz, yz, xz, xy, 0, 2), \
+        _turned(R, xx, yy, zz, yz, xz, xy, 0, 1)
+    return (q23 * (s2 - s3) ** 2 + q31 * (s3 - s1) ** 2 + q12 * (s1 - s2) ** 2
+            + l1 * s1 + l2 * s2 + l3 * s3 + (t23 / S23) ** 2 + (t13 / S13) ** 2 + (t12 / S12) ** 2)
+
+
+@njit(cache=True)
+def hoffman_bond_aligned(stress, scale, sel, c):
+    """The same index where the ply axes are a signed permutation of x, y, z (0 and 90 plies):
+    the ply-axes components are global ones, sel (6,) their Voigt positions (bit-identical to
+    the turned form: every other product is an exact zero)."""
+    q23, q31, q12, l1, l2, l3, S23, S13, S12 = c
+    s1, s2, s3, t23, t13, t12 = (stress[sel[0]], stress[sel[1]], stress[sel[2]], stress[sel[3]], stress[sel[4]],
+                                 stress[sel[5]])
+    if scale != 1.0:
+        s1, s2, s3, t23, t13, t12 = s1 / scale, s2 / scale, s3 / scale, t23 / scale, t13 / scale, t12 / scale
+    return (q23 * (s2 - s3) ** 2 + q31 * (s3 - s1) ** 2 + q12 * (s1 - s2) ** 2
+            + l1 * s1 + l2 * s2 + l3 * s3 + (t23 / S23) ** 2 + (t13 / S13) ** 2 + (t12 / S12) ** 2)
+
+
+def aligned_voigt(R: np.ndarray) -> np.ndarray | None:
+    """(6,) Voigt positions of the ply-axes stresses (11, 22, 33, 23, 13, 12) when the axes R
+    (3, 3) (columns) are a signed permutation of x, y, z; None otherwise."""
+    if not (np.all(np.isin(R, (-1.0, 0.0, 1.0))) and np.all(np.abs(R).sum(axis=0) == 1)):
+        return None
+    g = np.abs(R).argmax(axis=0)  # ply axis a is global axis g[a]
+    voigt = {(0, 0): 0, (1, 1): 1, (2, 2): 2, (1, 2): 3, (0, 2): 4, (0, 1): 5}
+    key = lambda i, j: voigt[(min(i, j), max(i, j))]
+    return np.array([key(g[0], g[0]), key(g[1], g[1]), key(g[2], g[2]), key(g[1], g[2]), key(g[0], g[2]),
+                     key(g[0], g[1])], np.int64)
+
+
+@njit(cache=True)
+def _turned(R, xx, yy, zz, yz, xz, xy, a, c):
+    """(R^T S R)[a, c] of the symmetric S given by its six components, axes R (3, 3) (columns)."""
+    r0, r1, r2 = R[0, c], R[1, c], R[2, c]
+    return (R[0, a] * (xx * r0 + xy * r1 + xz * r2) + R[1, a] * (xy * r0 + yy * r1 + yz * r2)
+            + R[2, a] * (xz * r0 + yz * r1 + zz * r2))
+
+
+@njit(cache=True)
 def hoffman_ply(stress, axes, scale, k):
     """(nb,) Hoffman index of global Voigt stresses (nb, 6) / scale (nb,) in the bonds' ply axes
     (nb, 3, 3) (columns); k = (Xt, Xc, Yt, Yc, Zt, Zc, S23, S13, S12)."""
-    Xt, Xc, Yt, Yc, Zt, Zc, S23, S13, S12 = k
-    X, Y, Z = 1 / (Xt * Xc), 1 / (Yt * Yc), 1 / (Zt * Zc)
-    pairs = ((0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1))
     out = np.empty(stress.shape[0])
-    S = np.empty((3, 3))
-    P = np.empty((3, 3))
+    c = hoffman_coefficients(k)
     for b in range(stress.shape[0]):
-        for m in range(6):
-            i, j = pairs[m]
-            S[i, j] = S[j, i] = stress[b, m] / scale[b]
-        R = axes[b]
-        for a in range(3):
-            for c in range(3):
-                acc = 0.0
-                for i in range(3):
-                    for j in range(3):
-                        acc += R[i, a] * S[i, j] * R[j, c]
-                P[a, c] = acc
-        s1, s2, s3, t23, t13, t12 = P[0, 0], P[1, 1], P[2, 2], P[1, 2], P[0, 2], P[0, 1]
-        out[b] = (0.5 * (Y + Z - X) * (s2 - s3) ** 2 + 0.5 * (Z + X - Y) * (s3 - s1) ** 2
-                  + 0.5 * (X + Y - Z) * (s1 - s2) ** 2
-                  + (1 / Xt - 1 / Xc) * s1 + (1 / Yt - 1 / Yc) * s2 + (1 / Zt - 1 / Zc) * s3
-                  + (t23 / S23) ** 2 + (t13 / S13) ** 2 + (t12 / S12) ** 2)
+        out[b] = hoffman_bond(stress[b], scale[b], axes[b], c)
     return out
 
 

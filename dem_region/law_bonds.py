@@ -44,7 +44,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import kernels
+from . import kernels, law_kernels
 from .laws import friction_traction
 
 
@@ -87,7 +87,9 @@ class LawBonds:
         self.traction = np.zeros((nb, 3))  # Pa
         self.work = 0.0  # J, work of the bond forces on the separations (slice)
         self.t_failed = np.full(nb, np.nan)  # s, when each bond reached full decohesion
+        self.force = np.zeros((nb, 3))  # N on each bond's second particle at the last evaluation
         self.time = 0.0
+        self._plan, self._bound = None, None  # the fused step's buffers, and the arrays it is bound to
         if self.along is not None:  # one (previous, next) pair of columns per tangent direction
             self.along = np.asarray(self.along, int).reshape(nb, -1)
             mid = 0.5 * (X[self.pairs[:, 0]] + X[self.pairs[:, 1]])
@@ -124,9 +126,11 @@ class LawBonds:
         dn = np.einsum("bi,bi->b", delta, self.normal)
         return dn, delta - dn[:, None] * self.normal
 
-    def evaluate(self, x: np.ndarray, dt: float) -> np.ndarray:
-        """Update the bonds from the positions x (len(ids), 3) m of the bonded particles after
-        a step of dt s; returns the force (nb, 3) N on each bond's second particle."""
+    def evaluate_reference(self, x: np.ndarray, dt: float) -> np.ndarray:
+        """The readable reference of the fused step (vectorised numpy, the law through
+        tractions_fast): update the bonds from the positions x (len(ids), 3) m of the bonded
+        particles after a step of dt s; returns the force (nb, 3) N on each bond's second
+        particle. The tests and benchmarks/coupled_step.py hold the kernels to it."""
         i, j = self._loc.T
         if self.finite_rotation:
             delta = self._corotate(x)
@@ -153,7 +157,7 @@ class LawBonds:
         self.t_failed[newly] = self.time
         self.work += 0.5 * float(np.einsum("b,bi,bi->", self.area, self.traction + t, delta - self.delta))
         self.delta, self.traction, self.damage = delta, t, d
-        self.force = -self.area[:, None] * (self._to_global(t) if self.finite_rotation else t)
+        self.force[:] = -self.area[:, None] * (self._to_global(t) if self.finite_rotation else t)
         return self.force
 
     def _corotate(self, x: np.ndarray) -> np.ndarray:
@@ -183,9 +187,9 @@ class LawBonds:
         a, b = self._dirs[0][:2]
         kernels.add_spin_forces(f, self._loc, a, b, self.traction, self._local, self._chord, self.area)
 
-    def apply(self, backend, dt: float) -> None:
-        """Read the bonded particles from the engine, evaluate, add the bond forces."""
-        F = self.evaluate(backend.positions_of(self.ids), dt)
+    def apply_reference(self, backend, dt: float) -> None:
+        """The reference of ``apply``: read the bonded particles, evaluate_reference, scatter."""
+        F = self.evaluate_reference(backend.positions_of(self.ids), dt)
         f = kernels.scatter_pairs(self._loc, F, len(self.ids))
         if self.along is not None and self.finite_rotation:
             self._add_spin_forces(f)
@@ -195,6 +199,54 @@ class LawBonds:
                 kernels.add_slope_forces(f, self._loc, self.normal, q, a, b)
         loaded = np.flatnonzero(np.any(f != 0.0, axis=1))  # open, failed bonds carry nothing
         backend.add_forces(self.ids[loaded], f[loaded])
+
+    # -- the fused step (law_kernels) -----------------------------------------------------------
+    def apply(self, target, dt: float) -> None:
+        """One step: read the bonded particles' positions, evaluate, add the bond forces. A
+        target with particle arrays (``x`` (N, 3) m, ``f`` (N, 3) N, ``rows_of(ids)``: the
+        coupling layer's ModelStep, the FEM's nodes) is read and written in place by the fused
+        kernels; any other (positions_of / add_forces) through a copy of its particles."""
+        if hasattr(target, "rows_of"):
+            if self._bound is not target:  # bind once: this family's particles as rows of the target's arrays
+                self._rows = np.ascontiguousarray(target.rows_of(self.ids), np.int64)
+                self._end, self._bound = self._rows[self._loc], target
+            self._step(target.x, target.f, self._rows, self._end, dt)
+            return
+        x = np.ascontiguousarray(target.positions_of(self.ids), float)
+        f = np.zeros_like(x)
+        rows = np.arange(len(self.ids))
+        self._step(x, f, rows, self._loc, dt)
+        loaded = np.flatnonzero(np.any(f != 0.0, axis=1))  # open, failed bonds carry nothing
+        target.add_forces(self.ids[loaded], f[loaded])
+
+    def evaluate(self, x: np.ndarray, dt: float) -> np.ndarray:
+        """Update the bonds from the positions x (len(ids), 3) m of the bonded particles after
+        a step of dt s; returns the force (nb, 3) N on each bond's second particle."""
+        x = np.ascontiguousarray(x, float)
+        self._step(x, np.zeros_like(x), np.arange(len(self.ids)), self._loc, dt)
+        return self.force
+
+    def _step(self, x, f, rows, end, dt) -> None:
+        """The two fused passes (law_kernels) on positions x (N, 3) m, adding into f (N, 3) N;
+        rows (len(ids),) and end (nb, 2): this family's particles and bond ends as rows of x."""
+        if self._plan is None:
+            self._plan = _FusedPlan(self)
+        P, law = self._plan, self.law
+        self.time += dt
+        ply = P.law == law_kernels.PLY
+        work, snap = P.bonds_pass(
+            x, end, P.loc, self.d0, self.normal, self.area, P.K,
+            P.kin, P.X_mid, P.dir_a, P.dir_b, P.dir_e, P.dir_h, P.un, P.s0, P.L0, P.axis, P.local, P.rot, P.chord,
+            P.law, P.hp, P.pstress, P.inc_ptr, P.inc_bond, P.cell, P.axes, P.aligned, P.ply_axes,
+            law.strength_scale if ply else P.none, P.hk, P.Gf,
+            law.m0 if ply else P.none, law.mf if ply else P.none, law.index if ply else P.none,
+            law.crushed if ply else P.no,
+            float(self.friction), float(self.v_reg), float(dt), self.time,
+            self.damage, self.delta, self.traction, self.t_failed, P.slots)
+        self.work += work
+        if snap:
+            law.snapback += int(snap)
+        P.gather_pass(P.slots_flat, P.ptr, P.entry, rows, f)
 
     def softened(self) -> np.ndarray:
         """(nb,) share of each bond's softening branch travelled (0: elastic or not initiated,
@@ -261,3 +313,91 @@ class LawBonds:
             if "law_" + k in d:
                 v = np.array(d["law_" + k])
                 setattr(self.law, k, v.astype(type(getattr(self.law, k)[0])) if v.ndim else int(v))
+
+
+class _FusedPlan:
+    """What the fused kernels need of one LawBonds, built once: kinematics and law codes,
+    neighbour tables, buffers (nothing is allocated per step) and the incidence lists, the
+    slots aimed at each particle in the order the reference (apply_reference) adds them."""
+
+    def __init__(self, bonds: LawBonds):
+        nb, law = len(bonds.pairs), bonds.law
+        big = nb >= law_kernels.PARALLEL_BONDS
+        self.bonds_pass = law_kernels.bonds_pass if big else law_kernels.bonds_pass_serial
+        self.gather_pass = law_kernels.gather_pass if big else law_kernels.gather_pass_serial
+        self.loc = np.ascontiguousarray(bonds._loc, np.int64)
+        self.none, self.no = np.zeros(0), np.zeros(0, bool)  # stand-ins for what a family lacks
+        dirs = bonds._dirs if bonds.along is not None else []
+        if bonds.finite_rotation:
+            self.kin = law_kernels.FRAME_2D if bonds.along is not None else law_kernels.CENTRAL
+        else:
+            self.kin = law_kernels.FIXED
+        self.dir_a = np.array([d[0] for d in dirs], np.int64).reshape(len(dirs), nb)
+        self.dir_b = np.array([d[1] for d in dirs], np.int64).reshape(len(dirs), nb)
+        self.dir_e = np.array([d[2] for d in dirs], float).reshape(len(dirs), nb, 3)
+        self.dir_h = np.array([d[3] for d in dirs], float).reshape(len(dirs), nb)
+        self.X_mid = np.ascontiguousarray(getattr(bonds, "_X_mid", np.zeros((nb, 3))))
+        self.un = np.zeros(nb)
+        self.s0 = np.ascontiguousarray(getattr(bonds, "_s0", np.zeros((nb, 3))))
+        self.L0 = np.ascontiguousarray(getattr(bonds, "_L0", np.zeros(nb)))
+        self.axis, self.local, self.chord = np.zeros((nb, 3)), np.zeros((nb, 3)), np.zeros((nb, 3))
+        self.rot = np.zeros((nb, 2))
+        if self.kin == law_kernels.CENTRAL:
+            bonds._axis = self.axis
+        elif self.kin == law_kernels.FRAME_2D:
+            bonds._local, bonds._rot, bonds._chord = self.local, self.rot, self.chord
+        self.K = np.ascontiguousarray(np.broadcast_to(np.asarray(law.K, float), (nb,)))
+        n = len(bonds.ids)
+        if hasattr(law, "initiate"):
+            self.law = law_kernels.PLY
+            k = law.strengths
+            self.hk = kernels.hoffman_coefficients(tuple(float(v) for v in (k.Xt, k.Xc, k.Yt, k.Yc, k.Zt, k.Zc,
+                                                                              k.S23, k.S13, k.S12)))
+            self.hp = np.zeros(7)
+            self.pstress = np.zeros((n, 6))
+            self.cell = np.ascontiguousarray(bonds._cell, float)
+            # the few distinct ply orientations, and each bond's (72 bytes less to read per bond)
+            self.axes, ply_axes = np.unique(law.axes.reshape(nb, 9), axis=0, return_inverse=True)
+            self.axes = np.ascontiguousarray(self.axes.reshape(-1, 3, 3))
+            self.ply_axes = np.asarray(ply_axes, np.int64).ravel()
+            aligned = [kernels.aligned_voigt(R) for R in self.axes]  # 0 / 90 plies: no rotation to do
+            self.aligned = (np.array(aligned, np.int64) if all(a is not None for a in aligned)
+                            else np.full((1, 6), -1, np.int64))
+            self.Gf = np.ascontiguousarray(law.Gf)
+            # each particle's bonds in bond order (its Love-Weber stress)
+            ends = self.loc.ravel()
+            order = np.argsort(ends, kind="stable")
+            self.inc_bond = (order // 2).astype(np.int64)
+            self.inc_ptr = np.concatenate([[0], np.cumsum(np.bincount(ends, minlength=n))]).astype(np.int64)
+        else:
+            self.law = law_kernels.HASHIN
+            self.hk = (1.0,) * 9
+            self.hp = np.array([law.K, law.Z0, law.R0, law.GIc, law.GIIc, law.eta, float(law.mixed_mode == "bk")])
+            self.pstress, self.cell = np.zeros((0, 6)), np.zeros(0)
+            self.axes, self.ply_axes, self.Gf = np.zeros((0, 3, 3)), np.zeros(0, np.int64), np.zeros((0, 1))
+            self.aligned = np.full((1, 6), -1, np.int64)
+            self.inc_bond, self.inc_ptr = np.zeros(0, np.int64), np.zeros(n + 1, np.int64)
+        # slots: 0 the force on the second end (the first takes minus it), then per tangent one
+        # on the next pair (b) and one on the previous pair (a); entries sorted by (particle,
+        # phase, bond, order), each 2 x slot (+ 1: minus sign)
+        S = 1 + 2 * len(dirs)
+        self.slots = np.zeros((nb, S, 3))
+        self.slots_flat = self.slots.reshape(nb * S, 3)
+        bonds.force = self.slots[:, 0]
+        m = np.arange(nb)
+        part, key = [self.loc[:, 1], self.loc[:, 0]], [(0, 0), (0, 1)]
+        slot = [2 * m * S, 2 * m * S + 1]
+        # the reference's order within a bond: slope terms b0, b1, a0, a1; spin b0, a0, b1, a1
+        order = (0, 2, 1, 3) if self.kin == law_kernels.FRAME_2D else (0, 1, 2, 3)
+        for t in range(len(dirs)):
+            for (prev, e), sub in zip(((0, 0), (0, 1), (1, 0), (1, 1)), order):  # prev: 0 pair b, 1 pair a
+                part.append(self.loc[(self.dir_a if prev else self.dir_b)[t], e])
+                key.append((1 + t, sub))
+                slot.append(2 * (m * S + 1 + 2 * t + prev))
+        particle = np.concatenate(part)
+        phase = np.concatenate([np.full(nb, k[0]) for k in key])
+        sub = np.concatenate([np.full(nb, k[1]) for k in key])
+        bond = np.tile(m, len(key))
+        by = np.lexsort((sub, bond, phase, particle))
+        self.entry = np.concatenate(slot)[by].astype(np.int64)
+        self.ptr = np.concatenate([[0], np.cumsum(np.bincount(particle, minlength=n))]).astype(np.int64)

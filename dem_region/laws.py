@@ -102,34 +102,51 @@ class HashinCohesiveLaw:
 
 
 @njit(cache=True)
-def _cohesive(delta, normal, damage, K, Z0, R0, GIc, GIIc, eta, bk, t, d_out):
-    n0, s0 = Z0 / K, R0 / K
-    for b in range(delta.shape[0]):
-        dn = delta[b, 0] * normal[b, 0] + delta[b, 1] * normal[b, 1] + delta[b, 2] * normal[b, 2]
-        s2 = 0.0
-        for k in range(3):
-            s2 += (delta[b, k] - dn * normal[b, k]) ** 2
-        slip = np.sqrt(s2)
-        if dn > 0:
-            m = np.sqrt(dn * dn + s2)
-            b2 = (slip / dn) ** 2
-            m0 = n0 * s0 * np.sqrt((1 + b2) / (s0 * s0 + b2 * n0 * n0))
-            B = b2 / (1 + b2)
-            if bk:
-                Gc = GIc + (GIIc - GIc) * B**eta
-            else:
-                Gc = 1.0 / (((1 - B) / GIc) ** eta + (B / GIIc) ** eta) ** (1.0 / eta)
+def hashin_bond(d0, d1, d2, n0, n1, n2, damage, K, Z0, R0, GIc, GIIc, eta, bk):
+    """One bond of the law (what ``tractions`` says over arrays): separation (d0, d1, d2) m,
+    unit normal (n0, n1, n2), damage so far -> (t0, t1, t2) Pa and the new damage. The one
+    place the fused kernels (law_kernels) and ``tractions_fast`` take the law from."""
+    dn = d0 * n0 + d1 * n1 + d2 * n2
+    s0_, s1_, s2_ = d0 - dn * n0, d1 - dn * n1, d2 - dn * n2
+    s2 = s0_ * s0_ + s1_ * s1_ + s2_ * s2_
+    slip = np.sqrt(s2)
+    no, so = Z0 / K, R0 / K  # onset separations of pure opening and pure shear
+    if dn > 0:
+        m = np.sqrt(dn * dn + s2)
+        b2 = (slip / dn) ** 2
+        m0 = no * so * np.sqrt((1 + b2) / (so * so + b2 * no * no))
+        B = b2 / (1 + b2)
+        if bk:
+            Gc = GIc + (GIIc - GIc) * B**eta
         else:
-            m = slip
-            m0 = s0
-            Gc = GIIc
-        mf = 2 * Gc / (K * m0)
-        dnow = mf * (m - m0) / (m * (mf - m0)) if m > m0 else 0.0
-        d = min(max(damage[b], dnow), 1.0)
-        d_out[b] = d
-        tn = (1 - d) * K * dn if dn > 0 else K * dn
-        for k in range(3):
-            t[b, k] = tn * normal[b, k] + (1 - d) * K * (delta[b, k] - dn * normal[b, k])
+            Gc = 1.0 / (((1 - B) / GIc) ** eta + (B / GIIc) ** eta) ** (1.0 / eta)
+    else:
+        m = slip
+        m0 = so
+        Gc = GIIc
+    mf = 2 * Gc / (K * m0)
+    dnow = mf * (m - m0) / (m * (mf - m0)) if m > m0 else 0.0
+    d = min(max(damage, dnow), 1.0)
+    tn = (1 - d) * K * dn if dn > 0 else K * dn
+    ks = (1 - d) * K
+    return tn * n0 + ks * s0_, tn * n1 + ks * s1_, tn * n2 + ks * s2_, d
+
+
+@njit(cache=True)
+def _cohesive(delta, normal, damage, K, Z0, R0, GIc, GIIc, eta, bk, t, d_out):
+    for b in range(delta.shape[0]):
+        t[b, 0], t[b, 1], t[b, 2], d_out[b] = hashin_bond(
+            delta[b, 0], delta[b, 1], delta[b, 2], normal[b, 0], normal[b, 1], normal[b, 2], damage[b],
+            K, Z0, R0, GIc, GIIc, eta, bk)
+
+
+@njit(cache=True)
+def ply_bond(dn, m0, mf, damage, K):
+    """One PlyBondLaw bond: opening dn m, onset / final opening m0, mf m (m0 = 0: not
+    initiated), damage so far, stiffness K Pa/m -> (normal traction Pa, new damage)."""
+    dnow = mf * (dn - m0) / (dn * (mf - m0)) if m0 > 0 and dn > m0 else 0.0
+    d = min(max(damage, dnow), 1.0)
+    return ((1 - d) * K * dn if dn > 0 else K * dn), d
 
 
 def friction_traction(tn: np.ndarray, slip_rate: np.ndarray, mu: float, v_reg: float) -> np.ndarray:
@@ -213,13 +230,17 @@ class PlyBondLaw:
             self.m0[new], self.mf[new] = m0, np.maximum(mf, m0 * (1 + 1e-12))
 
     def tractions_fast(self, delta: np.ndarray, normal: np.ndarray, damage: np.ndarray):
+        """delta (nb, 3) separations m, normal (nb, 3) unit -> (t (nb, 3) Pa, new damage (nb,))."""
         dn = np.einsum("bi,bi->b", delta, normal)
-        on = (self.m0 > 0) & (dn > self.m0)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            d_now = np.where(on, self.mf * (dn - self.m0) / (dn * (self.mf - self.m0)), 0.0)
-        d = np.clip(np.maximum(damage, d_now), 0.0, 1.0)
-        tn = np.where(dn > 0, (1 - d) * self.K * dn, self.K * dn)
+        tn, d = np.empty_like(dn), np.empty_like(dn)
+        _ply(dn, self.m0, self.mf, np.asarray(damage, float), self.K, tn, d)
         return tn[:, None] * normal, d
 
     def stored_density(self, dn: np.ndarray, ds: np.ndarray, damage: np.ndarray) -> np.ndarray:
         return 0.5 * self.K * ((1 - damage) * np.maximum(dn, 0) ** 2 + np.minimum(dn, 0) ** 2)
+
+
+@njit(cache=True)
+def _ply(dn, m0, mf, damage, K, tn, d):
+    for b in range(dn.shape[0]):
+        tn[b], d[b] = ply_bond(dn[b], m0[b], mf[b], damage[b], K[b])

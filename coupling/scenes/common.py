@@ -130,20 +130,21 @@ def fem_only(dyn: ExplicitDynamics, p: dict, t_end_default: float, probes: dict,
 
 
 class FemNodes:
-    """The FEM's nodes seen the way LawBonds sees an engine's particles: positions_of (k, 3) m
-    (2D meshes padded with z = 0) and add_forces, accumulated in f (n, 3) N until the FEM's
-    force evaluation takes them (``ExplicitDynamics.node_forces``)."""
+    """The FEM's nodes seen the way LawBonds sees an engine's particles: positions x (n, 3) m
+    (2D meshes padded with z = 0, refreshed before each evaluation) and forces f (n, 3) N,
+    accumulated until the FEM's force evaluation takes them (``ExplicitDynamics.node_forces``);
+    a node's row is its number."""
 
     def __init__(self, dyn: ExplicitDynamics):
         self.dyn = dyn
+        self.x = np.zeros((dyn.region.n_nodes, 3))
         self.f = np.zeros((dyn.region.n_nodes, 3))
 
-    def positions_of(self, ids):
-        x = self.dyn.region.X[ids] + self.dyn.state.u[ids]
-        return x if x.shape[1] == 3 else np.pad(x, ((0, 0), (0, 3 - x.shape[1])))
+    def refresh(self) -> None:
+        np.add(self.dyn.region.X, self.dyn.state.u, out=self.x[:, : self.dyn.region.dim])
 
-    def add_forces(self, ids, F):
-        np.add.at(self.f, ids, F)
+    def rows_of(self, ids):
+        return ids
 
     def model(self, bonds, dyn: ExplicitDynamics) -> "NodeBondForces":
         """A node-force model for ExplicitDynamics.node_forces that evaluates ``bonds``."""
@@ -161,6 +162,7 @@ class NodeBondForces:
 
     def __call__(self) -> np.ndarray:
         self.nodes.f[:] = 0.0
+        self.nodes.refresh()
         self.bonds.apply(self.nodes, self.dyn.state.t - self.last)
         self.last = self.dyn.state.t
         return self.nodes.f

@@ -5,6 +5,8 @@ engine in the same clock loop and ledger as the coupled and FEM-only runs.
 """
 from __future__ import annotations
 
+import time
+
 from typing import Callable
 
 import numpy as np
@@ -45,6 +47,7 @@ def dem_only(p: dict, scene: DemScene, dem: str, t_end_default: float,
     drive[0] with velocity drive[1](t) if given; dt: the step if the scene sets it (s);
     models: coupling-layer models on the engine's particles (LawBonds, ParticleImpactor);
     drive_dofs: the translations the drive prescribes (the others stay free)."""
+    in_models = [0.0]  # s in the coupling layer's models (inside the engine's hook)
     try:
         backend = make_backend(dem, p["dem.process"], p["dem.ranks"])
     except EngineUnavailable as exc:
@@ -60,10 +63,12 @@ def dem_only(p: dict, scene: DemScene, dem: str, t_end_default: float,
         hook = driver.between if driver else None
         if models:
             from ..coupled import ModelStep
-            steps, view = [0], ModelStep(backend, list(models))
+            steps, view, order = [0], ModelStep(backend, list(models)), list(models)
 
             def hook(drive_between=hook):
-                view.run(list(models), dt if steps[0] else 0.0)  # first: the drive reads their forces
+                t0 = time.perf_counter()
+                view.run(order, dt if steps[0] else 0.0)  # first: the drive reads their forces
+                in_models[0] += time.perf_counter() - t0
                 steps[0] += 1
                 if drive_between:
                     drive_between()
@@ -95,10 +100,10 @@ def dem_only(p: dict, scene: DemScene, dem: str, t_end_default: float,
         stages=[Stage("dem.step", "dem", lambda: backend.advance(hook))], dt=dt, n_steps=n,
         history_every=history_every or p["output.history_every"] or max(1, n // 1000), probes={}, energies=energies,
         counts={"fem_nodes": 0, "fem_elements": 0, "particles": scene.n, "bonds": len(scene.bonds),
-                "interface_particles": 0},
+                "interface_particles": 0, "law_bonds": sum(len(m.pairs) for m in models if hasattr(m, "pairs"))},
         clock_info={"dt_fem": 0.0, "dt_dem": dt, "dt_stable_dem": dt_stable, "substeps": 1},
         fields=fields, field_frames=p["output.field_frames"], energy_growth_tol=p["guards.energy_growth"],
         close=backend.finalize, versions={dem: backend.version},
-        timing_correction=lambda: {"dem": -getattr(backend, "transport_s", 0.0),
-                                   "transport": getattr(backend, "transport_s", 0.0)})
+        timing_correction=lambda: {"dem": -getattr(backend, "transport_s", 0.0) - in_models[0],
+                                   "models": in_models[0], "transport": getattr(backend, "transport_s", 0.0)})
     return sim, backend, driver

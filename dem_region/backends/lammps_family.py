@@ -32,6 +32,8 @@ import os
 
 import numpy as np
 
+from ..kernels import add_held_forces
+
 
 class VerletArrays:
     two_sided_walls = True  # a wall of sense 0 acts on both sides
@@ -272,19 +274,31 @@ class VerletArrays:
         written = driven | ~driven.any(axis=1, keepdims=True)  # partial particles: the driven components only
         self.V[ids] = np.where(written, v, self.V[ids])
 
+    bulk_arrays = True  # positions read and forces written on the engine's arrays (ModelStep)
+
     def add_forces(self, ids: np.ndarray, F: np.ndarray) -> None:
-        """Forces F (k, 3) N added to particles ``ids`` at this step (call from the hook)."""
-        ids, F = np.asarray(ids, int), np.asarray(F, float).reshape(-1, 3)
-        _add_rows(self._added, ids, F)
+        """Forces F (k, 3) N added to particles ``ids`` at this step (call from the hook). The
+        plan (which components of which rows take motion) is built once per ids array."""
+        F = np.ascontiguousarray(F, float).reshape(-1, 3)
+        key = (ids, self.dt, self._held_mask(), self._n_partial)  # a new set, step or prescription: a new plan
+        if getattr(self, "_plan_key", None) is None or any(a is not b for a, b in zip(key, self._plan_key)):
+            self._plan_key, self._plan = key, self._force_plan(np.asarray(ids, int))
+        rows, takes, mass = self._plan
+        add_held_forces(self._added, self.F, self.V, rows, F, takes, 0.5 * self.dt, mass)
+
+    def _force_plan(self, ids: np.ndarray):
+        """(rows (k,), takes (k, 3) bool: the components that move, their masses (k,) kg)."""
         # held: the interface (written velocities) and the fixed group (clamps) take no motion
-        held = self._held_mask()[ids]
-        free, Ff = ids[~held], F[~held].copy()
+        takes = np.repeat(~self._held_mask()[ids][:, None], 3, axis=1)
         if self.scene.plane:
-            Ff[:, 2] = 0.0
+            takes[:, 2] = False
         if self._n_partial:
-            Ff[self._driven[free]] = 0.0  # driven components take no force
-        _add_rows(self.F, free, Ff)
-        _add_rows(self.V, free, 0.5 * self.dt * Ff / self.mass[free, None])
+            takes &= ~self._driven[ids]  # driven components take no force
+        return np.ascontiguousarray(ids, np.int64), takes, np.ascontiguousarray(self.mass[ids], float)
+
+    def read_positions(self, ids: np.ndarray, out: np.ndarray) -> None:
+        """out (k, 3) m <- the positions of particles ``ids`` (one bulk copy)."""
+        np.take(self.X, ids, axis=0, out=out)
 
     def _held_mask(self) -> np.ndarray:
         """(n,) bool: the fully prescribed set and the fixed group (rebuilt when the set changes)."""
@@ -330,15 +344,6 @@ class VerletArrays:
         i, j = self.scene.bonds.T
         r = np.linalg.norm(self.X[i] - self.X[j], axis=1)
         return float(np.sum(self._bond_K * (r - self._bond_r0) ** 2)) + self._brittle_energy()
-
-
-def _add_rows(target: np.ndarray, ids: np.ndarray, F: np.ndarray) -> None:
-    """target[ids] += F, repeated ids summed. (The LAMMPS worker's venv has no numba; the
-    coupling layer hands over unique ids, where fancy indexing is exact and np.add.at slow.)"""
-    if len(np.unique(ids)) == len(ids):
-        target[ids] += F
-    else:
-        np.add.at(target, ids, F)
 
 
 def _significant(a: np.ndarray, digits: int) -> np.ndarray:

@@ -1,0 +1,145 @@
+"""The coupled step's cost: the law kernels alone, and per-stage times of real coupled runs.
+
+Usage: .venv/bin/python benchmarks/coupled_step.py [--bonds 1e3 1e4 1e5 1e6] [--steps 20]
+           [--repeat 5] [--runs beam_impact_coarse beam_impact] [--dem liggghts yade lammps]
+           [--skip-runs] [--skip-kernels]
+
+1. Kernels: the 3D quarter beam's lattice (beam_impact_3d: Hoffman ply bonds and Hashin
+   interface bonds with two tangents' slope terms), widened and lengthened until each family
+   has about the requested number of bonds, in a deformed state (random displacements of
+   1e-3 of the spacing: elastic and softening bonds); ns per bond-step of the fused kernels
+   on 1 and 2 threads and of the reference path (LawBonds.apply_reference: vectorised numpy,
+   today's path before the kernels) on the same bonds, side by side, medians of --repeat.
+2. Runs: each case coupled on each engine (a fresh process each, --set output to a minimum),
+   ms per engine step of each timing bucket of summary.json (dem = the engine's own time,
+   models = the coupling layer's laws with their transfer, interface, fem, transport, io,
+   orchestrator), and ns per law bond and step of the models bucket.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+
+class Arrays:
+    """Positions and forces of every particle; a particle's row is its id (what ModelStep is)."""
+
+    def __init__(self, x):
+        self.x, self.f = x, np.zeros_like(x)
+
+    def rows_of(self, ids):
+        return ids
+
+    def positions_of(self, ids):
+        return self.x[ids]
+
+    def add_forces(self, ids, F):
+        np.add.at(self.f, ids, F)
+
+
+def families(target_bonds: float):
+    """(ply LawBonds, interface LawBonds, reference positions) of a beam_impact_3d lattice
+    grown to about target_bonds ply bonds."""
+    from coupling.case import load_case
+    from coupling.scenes import beam_impact_3d
+    d = 0.6e-3  # two 0.15 mm plies per particle row
+    per_column = 1.2e5 / (41 * 41)  # ply bonds per (x, y) column of the 12 x 12 mm zone (measured)
+    columns = max(4, int(np.sqrt(target_bonds / per_column)))
+    width = 2 * columns * d
+    case = load_case("beam_impact_3d", {"geometry.width": width, "geometry.half_span": max(0.05, 2 * columns * d)})
+    block, _, intra, inter, _ = beam_impact_3d.particle_zone(case.parameters, (columns - 1) * d, True)
+    return intra, inter, block.x
+
+
+def time_family(bonds, X, steps: int, repeat: int, threads: list[int]) -> dict:
+    """Median ns per bond-step: fused on each thread count, reference."""
+    import numba
+    rng = np.random.default_rng(0)
+    xs = [X + rng.normal(size=X.shape) * 1e-3 * 0.6e-3 for _ in range(steps)]
+    nb = len(bonds.pairs)
+    out = {"bonds": nb}
+    state = bonds.checkpoint_state()
+    for label, n_threads in [(f"fused_{t}", t) for t in threads] + [("reference", None)]:
+        times = []
+        for _ in range(repeat):
+            bonds.restore_state(state)
+            a = Arrays(xs[0].copy())
+            if n_threads:
+                numba.set_num_threads(n_threads)
+                bonds.apply(a, 1e-8)  # compile / bind outside the timing
+            t0 = time.perf_counter()
+            for x in xs:
+                a.x[:] = x
+                bonds.apply(a, 1e-8) if n_threads else bonds.apply_reference(a, 1e-8)
+            times.append((time.perf_counter() - t0) / (steps * nb) * 1e9)
+        out[label] = statistics.median(times)
+    numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+    return out
+
+
+def run_case(case: str, dem: str) -> dict:
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "run"
+        args = [sys.executable, "-m", "coupling.cli", "run", case, "--quiet", "--out", str(out), "--dem", dem,
+                "--mode", "coupled", "--set", "output.field_frames=0"]
+        t0 = time.perf_counter()
+        subprocess.run(args, cwd=ROOT, check=True)
+        wall = time.perf_counter() - t0
+        s = json.loads((out / "summary.json").read_text())
+    steps = s["clock"]["steps"] * max(1, s["clock"].get("substeps", 1))
+    law_bonds = s["counts"].get("law_bonds") or 0
+    row = {"case": case, "dem": dem, "wall_s": wall, "engine_steps": steps, "law_bonds": law_bonds}
+    for k, v in s["timing_s"].items():
+        row[f"{k}_ms"] = 1e3 * v / steps
+    if law_bonds:
+        row["models_ns_per_bond_step"] = 1e9 * s["timing_s"]["models"] / (steps * law_bonds)
+    return row
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--bonds", type=float, nargs="+", default=[1e3, 1e4, 1e5, 1e6])
+    ap.add_argument("--steps", type=int, default=20)
+    ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--threads", type=int, nargs="+", default=[1, 2])
+    ap.add_argument("--runs", nargs="+", default=["beam_impact_coarse"])
+    ap.add_argument("--dem", nargs="+", default=["liggghts", "yade", "lammps"])
+    ap.add_argument("--skip-runs", action="store_true")
+    ap.add_argument("--skip-kernels", action="store_true")
+    a = ap.parse_args()
+    if not a.skip_kernels:
+        print("law kernels alone, ns per bond-step (median of %d)" % a.repeat)
+        print(f"{'family':<14}{'bonds':>10}" + "".join(f"{f'fused {t} thr':>14}" for t in a.threads)
+              + f"{'reference':>12}{'ratio':>8}")
+        for target in a.bonds:
+            intra, inter, X = families(target)
+            steps = max(3, int(a.steps * min(1.0, 1e5 / target)))
+            for name, b in (("ply (Hoffman)", intra), ("interface 3D", inter)):
+                r = time_family(b, X, steps, a.repeat, a.threads)
+                best = min(r[f"fused_{t}"] for t in a.threads)
+                print(f"{name:<14}{r['bonds']:>10d}" + "".join(f"{r[f'fused_{t}']:>14.1f}" for t in a.threads)
+                      + f"{r['reference']:>12.1f}{r['reference'] / best:>7.1f}x", flush=True)
+    if not a.skip_runs:
+        print("\ncoupled runs, ms per engine step by timing bucket")
+        for case in a.runs:
+            for dem in a.dem:
+                r = run_case(case, dem)
+                buckets = " ".join(f"{k[:-3]} {v:.3f}" for k, v in r.items() if k.endswith("_ms"))
+                extra = f"; models {r['models_ns_per_bond_step']:.0f} ns/bond-step" if "models_ns_per_bond_step" in r else ""
+                print(f"{case} on {dem}: wall {r['wall_s']:.1f} s, {r['engine_steps']} engine steps, "
+                      f"{r['law_bonds']} law bonds; {buckets}{extra}", flush=True)
+
+
+if __name__ == "__main__":
+    main()
