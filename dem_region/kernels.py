@@ -120,9 +120,12 @@ def hoffman_bond_aligned(stress, scale, sel, c):
 
 def aligned_voigt(R: np.ndarray) -> np.ndarray | None:
     """(6,) Voigt positions of the ply-axes stresses (11, 22, 33, 23, 13, 12) when the axes R
-    (3, 3) (columns) are a signed permutation of x, y, z; None otherwise."""
-    if not (np.all(np.isin(R, (-1.0, 0.0, 1.0))) and np.all(np.abs(R).sum(axis=0) == 1)):
+    (3, 3) (columns) are a signed permutation of x, y, z to 1e-12 (a 90 degree turn by cos / sin
+    leaves 6e-17: its products are below half an ulp of the terms they join); None otherwise."""
+    snapped = np.round(R)
+    if not (np.all(np.abs(R - snapped) < 1e-12) and np.all(np.abs(snapped).sum(axis=0) == 1)):
         return None
+    R = snapped
     g = np.abs(R).argmax(axis=0)  # ply axis a is global axis g[a]
     voigt = {(0, 0): 0, (1, 1): 1, (2, 2): 2, (1, 2): 3, (0, 2): 4, (0, 1): 5}
     key = lambda i, j: voigt[(min(i, j), max(i, j))]
@@ -132,10 +135,19 @@ def aligned_voigt(R: np.ndarray) -> np.ndarray | None:
 
 @njit(cache=True)
 def _turned(R, xx, yy, zz, yz, xz, xy, a, c):
-    """(R^T S R)[a, c] of the symmetric S given by its six components, axes R (3, 3) (columns)."""
-    r0, r1, r2 = R[0, c], R[1, c], R[2, c]
-    return (R[0, a] * (xx * r0 + xy * r1 + xz * r2) + R[1, a] * (xy * r0 + yy * r1 + yz * r2)
-            + R[2, a] * (xz * r0 + yz * r1 + zz * r2))
+    """(R^T S R)[a, c] of the symmetric S given by its six components, axes R (3, 3) (columns),
+    summed over i, j in order (the association of the numpy form: its digits, not only its value)."""
+    ra0, ra1, ra2, rc0, rc1, rc2 = R[0, a], R[1, a], R[2, a], R[0, c], R[1, c], R[2, c]
+    acc = ra0 * xx * rc0
+    acc += ra0 * xy * rc1
+    acc += ra0 * xz * rc2
+    acc += ra1 * xy * rc0
+    acc += ra1 * yy * rc1
+    acc += ra1 * yz * rc2
+    acc += ra2 * xz * rc0
+    acc += ra2 * yz * rc1
+    acc += ra2 * zz * rc2
+    return acc
 
 
 @njit(cache=True)

@@ -33,7 +33,7 @@ if "NUMBA_THREADING_LAYER" not in os.environ:
     except ImportError:
         pass
 
-PARALLEL_BONDS = 20_000  # families smaller than this run the serial build (no thread wake-ups)
+PARALLEL_BONDS = 10_000  # families smaller than this run the serial build (no thread wake-ups)
 HASHIN, PLY = 0, 1  # law families
 FIXED, CENTRAL, FRAME_2D = 0, 1, 2  # kinematics: fixed normal, corotated central, corotated 2D frame
 

@@ -115,7 +115,8 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
 
     backend = get_backend(engine)(comm=comm) if comm is not None else get_backend(engine)()
     conn = _Ranks(conn, comm)
-    state = {"ids": np.zeros(0, int), "F": None, "V": None, "blocks": [], "in_hook": 0.0}
+    state = {"ids": np.zeros(0, int), "F": None, "V": None, "blocks": [], "in_hook": 0.0,
+             "model_ids": None, "X_model": None, "F_model": None}
 
     def between():
         """The engine's coupling hook: interface forces out, then serve queries until 'go'."""
@@ -128,12 +129,17 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
     def _between():
         if state["F"] is not None:
             state["F"][:] = backend.forces(state["ids"])
+        if state["X_model"] is not None:  # the orchestrator's models read these positions
+            backend.read_positions(state["model_ids"], state["X_model"])
         conn.send(("hook",))
         while True:
             msg = conn.recv()
             if msg[0] == "go":
                 break
             handle(msg)
+        if state["F_model"] is not None:  # ... and wrote their forces here
+            backend.add_forces(state["model_ids"], state["F_model"])
+            state["F_model"][:] = 0.0
         if len(state["ids"]):  # rank 0 reads the shared block, every rank sets the same values
             V = conn.share(state["V"])  # (other ranks: None here, rank 0's values returned)
             backend.set_velocities(state["ids"], V)
@@ -152,6 +158,13 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
                 if conn.root:
                     (sf, state["F"]), (sv, state["V"]) = _attach(args[1], (len(ids), 3)), _attach(args[2], (len(ids), 3))
                     state["blocks"] += [sf, sv]
+                conn.send(("ok",))
+            elif op == "models":  # the models' particles: positions out, forces in, in shared memory
+                ids = state["model_ids"] = np.asarray(args[0], int)
+                (sx, state["X_model"]), (sf, state["F_model"]) = (_attach(a, (len(ids), 3)) for a in args[1:3])
+                state["blocks"] += [sx, sf]
+                state["F_model"][:] = 0.0
+                backend.read_positions(ids, state["X_model"])
                 conn.send(("ok",))
             elif op == "set_dt":
                 backend.set_dt(args[0])

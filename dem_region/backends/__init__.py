@@ -58,6 +58,10 @@ def lammps_env() -> dict:
     foreign = ("PMIX_", "OMPI_", "OPAL_", "PRTE_", "PMI_")
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH" and not k.startswith(foreign)}
     env["LD_LIBRARY_PATH"] = f"{LAMMPS_VENV}/lib:" + env.get("LD_LIBRARY_PATH", "")
+    # its numba is another version than the orchestrator's: compiled kernels cached apart (two
+    # versions sharing __pycache__ would recompile each other's kernels at every start)
+    cache = Path(env.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "femdem" / "numba-lammps"
+    env.setdefault("NUMBA_CACHE_DIR", str(cache))
     return env
 
 

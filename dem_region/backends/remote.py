@@ -55,6 +55,7 @@ class RemoteBackend:
         self.prescribed = self.ids
         self._row = np.zeros(0, int)  # particle id -> its row in F / V, -1 if not an interface particle
         self._added_here = None  # (len(ids), 3) N added to interface particles during this hook
+        self._model_ids = None  # the coupling-layer models' particles, read and written in shared memory
 
     def _launch_ranks(self, python: str, engine: str, env: dict) -> socket.socket:
         mpiexec = Path(python).parent / "mpiexec"
@@ -128,9 +129,10 @@ class RemoteBackend:
         self._row = np.full(int(self.ids.max()) + 1 if len(self.ids) else 0, -1)
         self._row[self.ids] = np.arange(len(self.ids))
         nbytes = max(8, 8 * 3 * len(self.ids))
-        self.blocks = [shared_memory.SharedMemory(create=True, size=nbytes) for _ in range(2)]
-        self.F, self.V = (np.ndarray((len(self.ids), 3), dtype=np.float64, buffer=b.buf) for b in self.blocks)
-        self._call("prescribe", self.ids.tolist(), self.blocks[0].name, self.blocks[1].name)
+        blocks = [shared_memory.SharedMemory(create=True, size=nbytes) for _ in range(2)]
+        self.blocks += blocks
+        self.F, self.V = (np.ndarray((len(self.ids), 3), dtype=np.float64, buffer=b.buf) for b in blocks)
+        self._call("prescribe", self.ids.tolist(), blocks[0].name, blocks[1].name)
 
     def _run(self, op: str, between: Callable[[], None] | None, n: int = 1) -> None:
         clock = time.perf_counter
@@ -173,17 +175,56 @@ class RemoteBackend:
         else:
             self._call("call", "set_velocities", np.asarray(ids).tolist(), np.asarray(v).tolist())
 
+    @property
+    def bulk_arrays(self) -> bool:
+        """One rank: the models' positions and forces move through shared memory (ModelStep)."""
+        return self.ranks == 1
+
+    def read_positions(self, ids: np.ndarray, out: np.ndarray) -> None:
+        """out (k, 3) m <- positions of particles ``ids`` (the models' set: the worker writes
+        them into shared memory before each hook; the first call sets that up)."""
+        if self.ranks > 1:
+            out[:] = self.positions_of(ids)
+            return
+        if ids is not self._model_ids:
+            self._share_model_particles(ids)
+        out[:] = self._X_model
+
+    def _share_model_particles(self, ids: np.ndarray) -> None:
+        nbytes = max(8, 8 * 3 * len(ids))
+        blocks = [shared_memory.SharedMemory(create=True, size=nbytes) for _ in range(2)]
+        self.blocks += blocks
+        self._X_model, self._F_model = (np.ndarray((len(ids), 3), dtype=np.float64, buffer=b.buf) for b in blocks)
+        self._call("models", np.asarray(ids).tolist(), blocks[0].name, blocks[1].name)
+        self._model_ids = ids
+        rows = self._rows_of(np.asarray(ids, int))
+        self._model_tied = np.flatnonzero(rows >= 0), rows[rows >= 0]  # model rows on interface particles
+
+    def _rows_of(self, ids: np.ndarray) -> np.ndarray:
+        """Rows of ``ids`` in the interface arrays, -1 for the others."""
+        if not len(self._row):
+            return np.full(len(ids), -1)
+        return np.where(ids < len(self._row), self._row[np.minimum(ids, len(self._row) - 1)], -1)
+
+    def _tied_forces(self, rows: np.ndarray, F: np.ndarray) -> None:
+        """Forces on interface particles added during this hook: the tie reads them through forces()."""
+        if self._added_here is None:
+            self._added_here = np.zeros((len(self.ids), 3))
+        np.add.at(self._added_here, rows, F)
+
     def add_forces(self, ids: np.ndarray, F: np.ndarray) -> None:
+        if ids is self._model_ids:  # the models' bulk write: applied by the worker when the hook returns
+            self._F_model[:] = F
+            src, rows = self._model_tied
+            if len(rows):
+                self._tied_forces(rows, np.asarray(F, float)[src])
+            return
         if len(ids):
             self._call("call", "add_forces", np.asarray(ids).tolist(), np.asarray(F).tolist())
-            ids = np.asarray(ids, int)
-            rows = np.where(ids < len(self._row), self._row[np.minimum(ids, len(self._row) - 1)], -1) \
-                if len(self._row) else np.full(len(ids), -1)
+            rows = self._rows_of(np.asarray(ids, int))
             tied = rows >= 0
-            if tied.any():  # forces on interface particles: the tie reads them through forces()
-                if self._added_here is None:
-                    self._added_here = np.zeros((len(self.ids), 3))
-                np.add.at(self._added_here, rows[tied], np.asarray(F, float).reshape(-1, 3)[tied])
+            if tied.any():
+                self._tied_forces(rows[tied], np.asarray(F, float).reshape(-1, 3)[tied])
 
     def positions_of(self, ids: np.ndarray) -> np.ndarray:
         return np.asarray(self._call("call", "positions_of", np.asarray(ids).tolist())[1])

@@ -34,6 +34,7 @@ def _import_yade():
     with contextlib.redirect_stdout(io.StringIO()):  # yade prints 'Using python version' on import
         import yade
         import yade.config
+        import yade._utils
         from yade import wrapper
     return yade, wrapper
 
@@ -201,17 +202,26 @@ class YadeBackend:
         return _rows(map(f, np.asarray(ids, int).tolist()))
 
     def add_forces(self, ids: np.ndarray, F: np.ndarray) -> None:
-        """Forces (k, 3) N added to particles ``ids`` for the next move (call from the hook)."""
-        V3, add = self.yade.Vector3, self.O.forces.addF
-        for i, (a, b, c) in zip(np.asarray(ids, int).tolist(), np.asarray(F, float).tolist()):
-            add(i, V3(a, b, c))
+        """Forces (k, 3) N added to particles ``ids`` for the next move (call from the hook).
+        YADE has no bulk write: one addF per particle, a list converted by boost (1.4 us per
+        particle, against 2.7 us through a Vector3; measured in benchmarks/coupled_step.py)."""
+        add = self.O.forces.addF
+        for i, row in zip(np.asarray(ids, int).tolist(), np.asarray(F, float).tolist()):
+            add(i, row)
 
     def positions_of(self, ids: np.ndarray) -> np.ndarray:
-        states = self._states
-        return _rows(states[i].pos for i in np.asarray(ids, int).tolist())
+        return self.positions()[np.asarray(ids, int)]
+
+    def read_positions(self, ids: np.ndarray, out: np.ndarray) -> None:
+        """out (k, 3) m <- the positions of particles ``ids``: YADE's one bulk read is of every
+        sphere, one coordinate at a time (coordsAndDisplacements: 0.47 us per particle, against
+        1.7 us reading each body's state)."""
+        np.take(self.positions(), ids, axis=0, out=out)
 
     def positions(self) -> np.ndarray:
-        return _rows(s.pos for s in self._states)
+        coords = self.yade._utils.coordsAndDisplacements
+        x = np.column_stack([np.asarray(coords(k)[0], float) for k in range(3)])
+        return x[: self.scene.n]  # every body in id order: the particles, then the walls
 
     def velocities(self) -> np.ndarray:
         return _rows(s.vel for s in self._states)

@@ -1,0 +1,149 @@
+"""The fused law kernels (dem_region/law_kernels.py) against the readable reference
+(LawBonds.apply_reference: the law's vectorised equations, friction_traction, the numpy
+scatter) on random deformation paths from elastic through softening to fully failed faces
+sliding with friction, for every law family the scenes build: forces, separations, tractions,
+damage, failure times and the law's state agree bit for bit (the incidence lists follow the
+reference's order of sums); the dissipated work to round-off (its sum runs in another order).
+"""
+from __future__ import annotations
+
+import copy
+from functools import lru_cache
+
+import numpy as np
+import pytest
+from hypothesis import example, given, settings, strategies as st
+
+from dem_region.law_bonds import LawBonds
+from dem_region.laws import HashinCohesiveLaw
+
+AS4 = HashinCohesiveLaw(K=1e14, Z0=80e6, R0=100e6, GIc=969.0, GIIc=1719.0, eta=2.284)
+
+
+class _Arrays:
+    """A particle array target (what ModelStep is): rows = particle ids."""
+
+    def __init__(self, x):
+        self.x, self.f = x, np.zeros_like(x)
+
+    def rows_of(self, ids):
+        return ids
+
+
+class _Engine:
+    """A target without arrays: positions_of / add_forces only (the copy path)."""
+
+    def __init__(self, x):
+        self.x, self.f = x, np.zeros_like(x)
+
+    def positions_of(self, ids):
+        return self.x[ids]
+
+    def add_forces(self, ids, F):
+        np.add.at(self.f, ids, F)
+
+
+@lru_cache(maxsize=None)
+def _family(name: str):
+    """(LawBonds, reference positions X (n, 3), plane) of one law family as a scene builds it."""
+    from coupling.case import load_case
+    if name in ("ply_2d", "interface_2d"):
+        from coupling.scenes import beam_impact
+        out = beam_impact.particle_zone(load_case("beam_impact_coarse").parameters, 3e-3, True)
+        return (out[2] if name == "ply_2d" else out[3]), out[0].x, True
+    if name in ("ply_3d", "interface_3d"):
+        from coupling.scenes import beam_impact_3d
+        out = beam_impact_3d.particle_zone(load_case("beam_impact_3d_coarse").parameters, 2.4e-3, True)
+        return (out[2] if name == "ply_3d" else out[3]), out[0].x, False
+    n, h = 8, 1e-3
+    X = np.array([[c * h, y, 0.0] for c in range(n) for y in (0.0, h)])
+    pairs = np.arange(2 * n).reshape(n, 2)
+    k = np.arange(n)
+    along = np.column_stack([np.where(k > 0, k - 1, -1), np.where(k < n - 1, k + 1, -1)])
+    if name == "corotated_interface":
+        return LawBonds(pairs, X, [[0.0, 1.0, 0.0]] * n, h * h, AS4, along=along, finite_rotation=True,
+                        friction=0.4), X, True
+    if name == "central_hashin":  # node pairs (rod_impact's FEM layers): raw relative translation
+        return LawBonds(pairs, X, [[0.0, 1.0, 0.0]] * n, h * h, AS4, friction=0.3), X, True
+    if name == "corotated_ply":
+        from dem_region.laws import PlyBondLaw
+        from fem_region.failure import HoffmanStrengths
+        X = np.array([[i * h, j * h, 0.0] for i in range(4) for j in range(4)])
+        pairs = np.array([(a, b) for a in range(16) for b in range(a + 1, 16) if np.linalg.norm(X[a] - X[b]) < 1.5 * h])
+        law = PlyBondLaw(np.full(len(pairs), 1e14), [[100.0, 50.0]], HoffmanStrengths(*([60e6] * 9)), np.eye(3))
+        return LawBonds(pairs, X, X[pairs[:, 1]] - X[pairs[:, 0]], h * h, law, volume=np.full(16, h**3),
+                        finite_rotation=True, friction=0.2), X, True
+    raise KeyError(name)
+
+
+FAMILIES = ["ply_2d", "interface_2d", "ply_3d", "interface_3d", "corotated_interface", "central_hashin",
+            "corotated_ply"]
+
+
+@pytest.mark.parametrize("name", FAMILIES)
+@settings(max_examples=6, deadline=None, derandomize=True)
+@given(seed=st.integers(0, 2**31), strain=st.floats(1e-4, 0.3), spin=st.floats(-0.3, 0.3),
+       noise=st.floats(0.0, 3e-3), dt=st.sampled_from([0.0, 1e-9, 3e-8]))
+@example(seed=1, strain=0.3, spin=0.2, noise=1e-3, dt=1e-9)  # every bond fails, closed faces slide
+def test_fused_kernels_are_the_reference_law(name, seed, strain, spin, noise, dt):
+    """A path of 60 steps: stretch and shear growing to ``strain`` (above 0.1 most bonds fail,
+    at 0.3 nearly all), then pressed back past closing (closed failed faces slide with friction), with
+    a rigid spin (large for the corotated families) and random noise of ``noise`` x the spacing."""
+    bonds0, X, plane = _family(name)
+    fused, ref = copy.deepcopy(bonds0), copy.deepcopy(bonds0)
+    rng = np.random.default_rng(seed)
+    sliding = 0  # most failed bonds closed at once
+    h = float(np.median(np.linalg.norm(fused.d0, axis=1)))
+    corotated = fused.finite_rotation
+    for k in range(60):
+        s = strain * (k / 40 if k < 40 else (60 - k) / 20 - 0.5)  # load, then press back past closing
+        e = np.array([[s, 0.6 * s, 0.0], [0.4 * s, s, 0.0], [0.3 * s, 0.2 * s, s]])
+        x = X + (X - X.mean(axis=0)) @ e.T + rng.normal(size=X.shape) * noise * h
+        if corotated:
+            c, sn = np.cos(spin * k / 60), np.sin(spin * k / 60)
+            x = x @ np.array([[c, -sn, 0], [sn, c, 0], [0, 0, 1]]).T
+        if plane:
+            x[:, 2] = X[:, 2]
+        a, b = _Arrays(x.copy()), _Engine(x.copy())
+        fused.apply(a, dt)
+        ref.apply_reference(b, dt)
+        np.testing.assert_array_equal(a.f, b.f)
+        sliding = max(sliding, int(np.sum((ref.damage >= 1) & (np.einsum("bi,bi->b", ref.delta, ref.normal) < 0))))
+    if strain >= 0.3:  # the path is not vacuous: (nearly) every bond failed, closed faces slid
+        assert ref.failed().mean() > 0.9 and sliding > 0
+    for key in ("damage", "delta", "traction", "t_failed"):
+        np.testing.assert_array_equal(getattr(fused, key), getattr(ref, key))
+    for key in ("m0", "mf", "crushed", "snapback"):
+        if hasattr(fused.law, key):
+            np.testing.assert_array_equal(getattr(fused.law, key), getattr(ref.law, key))
+    assert fused.work == pytest.approx(ref.work, rel=1e-12, abs=1e-12 * (abs(ref.work) + 1e-30))
+
+
+def test_the_copy_path_is_the_array_path():
+    """A target without particle arrays (positions_of / add_forces) gets the same forces."""
+    bonds0, X, _ = _family("interface_2d")
+    a_, b_ = copy.deepcopy(bonds0), copy.deepcopy(bonds0)
+    x = X + np.random.default_rng(0).normal(size=X.shape) * 1e-6 * [1, 1, 0]
+    a, b = _Arrays(x.copy()), _Engine(x.copy())
+    a_.apply(a, 1e-9)
+    b_.apply(b, 1e-9)
+    np.testing.assert_array_equal(a.f, b.f)
+
+
+def test_large_families_run_in_parallel_to_the_same_bits():
+    """Above PARALLEL_BONDS the parallel build runs; its forces equal the serial build's."""
+    from dem_region import law_kernels
+    bonds0, X, _ = _family("ply_3d")
+    x = X + np.random.default_rng(1).normal(size=X.shape) * 3e-6
+    out = []
+    for threshold in (0, 10**9):
+        law_kernels.PARALLEL_BONDS, saved = threshold, law_kernels.PARALLEL_BONDS
+        try:
+            b = copy.deepcopy(bonds0)
+            b._plan = None
+            a = _Arrays(x.copy())
+            b.apply(a, 1e-9)
+            out.append(a.f)
+        finally:
+            law_kernels.PARALLEL_BONDS = saved
+    np.testing.assert_array_equal(out[0], out[1])
