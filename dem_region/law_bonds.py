@@ -322,7 +322,7 @@ class _FusedPlan:
 
     def __init__(self, bonds: LawBonds):
         nb, law = len(bonds.pairs), bonds.law
-        big = nb >= law_kernels.PARALLEL_BONDS
+        big = nb >= law_kernels.PARALLEL_BONDS and law_kernels.THREADS_ALLOWED
         self.bonds_pass = law_kernels.bonds_pass if big else law_kernels.bonds_pass_serial
         self.gather_pass = law_kernels.gather_pass if big else law_kernels.gather_pass_serial
         self.loc = np.ascontiguousarray(bonds._loc, np.int64)

@@ -26,14 +26,15 @@ from .laws import hashin_bond, ply_bond
 
 if "NUMBA_THREADING_LAYER" not in os.environ:
     # OpenMP: a parallel region wakes its threads in microseconds here; with TBB a pass over a
-    # few hundred bonds on two threads took 0.5-1 ms (measured, 2-core VM)
-    try:
-        from numba.np.ufunc import omppool  # noqa: F401  (the layer's library loads)
-        numba.config.THREADING_LAYER = "omp"
-    except ImportError:
-        pass
+    # few hundred bonds on two threads took 0.5-1 ms (measured, 2-core VM). Chosen lazily: the
+    # layer loads (and sets the OpenMP thread count) at the first parallel launch only.
+    numba.config.THREADING_LAYER = "omp"
 
 PARALLEL_BONDS = 10_000  # families smaller than this run the serial build (no thread wake-ups)
+# False where an engine owns the process's OpenMP runtime (YADE: numba's OpenMP layer would set
+# its thread count at each launch, and a YADE step on more threads than asked sums its forces in
+# another order from run to run)
+THREADS_ALLOWED = True
 HASHIN, PLY = 0, 1  # law families
 FIXED, CENTRAL, FRAME_2D = 0, 1, 2  # kinematics: fixed normal, corotated central, corotated 2D frame
 

@@ -29,6 +29,15 @@ def _import_yade():
     # one OpenMP thread unless the user asks for more: as fast for the small zones measured
     # here (8.7 s vs 9.0 s wall, half the CPU) and it leaves the other core to the FEM side
     os.environ.setdefault("OMP_NUM_THREADS", "1")
+    # the process's OpenMP runtime is YADE's: the law kernels stay serial, and a count set
+    # before (an earlier parallel launch in this process) goes back to the one asked for
+    from .. import law_kernels
+    law_kernels.THREADS_ALLOWED = False
+    import ctypes
+    try:
+        ctypes.CDLL("libgomp.so.1").omp_set_num_threads(int(os.environ["OMP_NUM_THREADS"]))
+    except (OSError, ValueError):
+        pass
     if YADE_PY not in sys.path:
         sys.path.insert(1, YADE_PY)
     with contextlib.redirect_stdout(io.StringIO()):  # yade prints 'Using python version' on import
