@@ -147,3 +147,27 @@ def test_large_families_run_in_parallel_to_the_same_bits():
         finally:
             law_kernels.PARALLEL_BONDS = saved
     np.testing.assert_array_equal(out[0], out[1])
+
+
+@settings(max_examples=20, deadline=None, derandomize=True)
+@given(seed=st.integers(0, 2**31), dim=st.sampled_from([2, 3]), friction=st.sampled_from([0.0, 0.3]))
+def test_compiled_ball_contact_is_the_gap_form(seed, dim, friction):
+    """RigidImpactor.forces of a ball (compiled) = the readable gap form: penalty x penetration
+    along the normal, Coulomb friction against the regularised tangential slip, to the bit;
+    stored energy to round-off."""
+    from fem_region.impactor import RigidImpactor
+    rng = np.random.default_rng(seed)
+    imp = RigidImpactor("sphere", rng.normal(size=dim) * 0.1, 1.0, 1.0, rng.normal(size=dim), 1e6,
+                        friction=friction)
+    x, v = rng.normal(size=(300, dim)) * 0.8, rng.normal(size=(300, dim))
+    f, stored = imp.forces(x, v)
+    pen, n = imp.gap(x)
+    fn = imp.penalty * pen
+    ref = fn[:, None] * n
+    if friction:
+        vr = v - imp.v
+        vt = vr - np.einsum("mi,mi->m", vr, n)[:, None] * n
+        ref -= (friction * fn / np.sqrt(np.einsum("mi,mi->m", vt, vt) + imp.slip_velocity**2))[:, None] * vt
+    assert (pen > 0).any() and (pen == 0).any()
+    np.testing.assert_array_equal(f, ref)
+    assert stored == pytest.approx(0.5 * imp.penalty * float(pen @ pen), rel=1e-14)
