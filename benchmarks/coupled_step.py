@@ -2,7 +2,7 @@
 
 Usage: .venv/bin/python benchmarks/coupled_step.py [--bonds 1e3 1e4 1e5 1e6] [--steps 20]
            [--repeat 5] [--runs beam_impact_coarse beam_impact] [--dem liggghts yade lammps]
-           [--skip-runs] [--skip-kernels]
+           [--run-set clock.t_end=2e-4] [--skip-runs] [--skip-kernels]
 
 1. Kernels: the 3D quarter beam's lattice (beam_impact_3d: Hoffman ply bonds and Hashin
    interface bonds with two tangents' slope terms), widened and lengthened until each family
@@ -88,11 +88,13 @@ def time_family(bonds, X, steps: int, repeat: int, threads: list[int]) -> dict:
     return out
 
 
-def run_case(case: str, dem: str) -> dict:
+def run_case(case: str, dem: str, sets: list[str]) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "run"
         args = [sys.executable, "-m", "coupling.cli", "run", case, "--quiet", "--out", str(out), "--dem", dem,
                 "--mode", "coupled", "--set", "output.field_frames=0"]
+        for item in sets:
+            args += ["--set", item]
         t0 = time.perf_counter()
         subprocess.run(args, cwd=ROOT, check=True)
         wall = time.perf_counter() - t0
@@ -115,6 +117,8 @@ def main():
     ap.add_argument("--threads", type=int, nargs="+", default=[1, 2])
     ap.add_argument("--runs", nargs="+", default=["beam_impact_coarse"])
     ap.add_argument("--dem", nargs="+", default=["liggghts", "yade", "lammps"])
+    ap.add_argument("--run-set", action="append", default=[], metavar="KEY=VALUE",
+                    help="for the runs, e.g. clock.t_end=2e-4 (ms per step do not need the whole run)")
     ap.add_argument("--skip-runs", action="store_true")
     ap.add_argument("--skip-kernels", action="store_true")
     a = ap.parse_args()
@@ -134,7 +138,7 @@ def main():
         print("\ncoupled runs, ms per engine step by timing bucket")
         for case in a.runs:
             for dem in a.dem:
-                r = run_case(case, dem)
+                r = run_case(case, dem, a.run_set)
                 buckets = " ".join(f"{k[:-3]} {v:.3f}" for k, v in r.items() if k.endswith("_ms"))
                 extra = f"; models {r['models_ns_per_bond_step']:.0f} ns/bond-step" if "models_ns_per_bond_step" in r else ""
                 print(f"{case} on {dem}: wall {r['wall_s']:.1f} s, {r['engine_steps']} engine steps, "
