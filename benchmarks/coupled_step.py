@@ -7,7 +7,8 @@ Usage: .venv/bin/python benchmarks/coupled_step.py [--bonds 1e3 1e4 1e5 1e6] [--
 1. Kernels: the 3D quarter beam's lattice (beam_impact_3d: Hoffman ply bonds and Hashin
    interface bonds with two tangents' slope terms), widened and lengthened until each family
    has about the requested number of bonds, in a deformed state (random displacements of
-   1e-3 of the spacing: elastic and softening bonds); ns per bond-step of the fused kernels
+   --noise x the spacing, 1e-4 by default: elastic, the state of most bonds most of the time;
+   at 1e-3 many bonds sit at initiation and re-test it every step); ns per bond-step of the fused kernels
    on 1 and 2 threads and of the reference path (LawBonds.apply_reference: vectorised numpy,
    today's path before the kernels) on the same bonds, side by side, medians of --repeat.
 2. Runs: each case coupled on each engine (a fresh process each, --set output to a minimum),
@@ -62,11 +63,11 @@ def families(target_bonds: float):
     return intra, inter, block.x
 
 
-def time_family(bonds, X, steps: int, repeat: int, threads: list[int]) -> dict:
+def time_family(bonds, X, steps: int, repeat: int, threads: list[int], noise: float) -> dict:
     """Median ns per bond-step: fused on each thread count, reference."""
     import numba
     rng = np.random.default_rng(0)
-    xs = [X + rng.normal(size=X.shape) * 1e-3 * 0.6e-3 for _ in range(steps)]
+    xs = [X + rng.normal(size=X.shape) * noise * 0.6e-3 for _ in range(steps)]
     nb = len(bonds.pairs)
     out = {"bonds": nb}
     state = bonds.checkpoint_state()
@@ -85,6 +86,45 @@ def time_family(bonds, X, steps: int, repeat: int, threads: list[int]) -> dict:
             times.append((time.perf_counter() - t0) / (steps * nb) * 1e9)
         out[label] = statistics.median(times)
     numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+    return out
+
+
+def yade_transfer(n: int = 1296, repeat: int = 200) -> dict:
+    """us per particle of each path between numpy and YADE (a scene of n spheres; the adapter's
+    paths are the fast ones): positions read body by body and through coordsAndDisplacements,
+    forces added through a Vector3 and from a list, and YADE's own step for comparison."""
+    from dem_region.backends.yade import _import_yade, _rows
+    yade, w = _import_yade()
+    O, u = yade.O, yade.utils
+    O.reset()
+    O.bodies.append([u.sphere((i * 1e-3, (i % 7) * 1e-3, 0), 4e-4) for i in range(n)])
+    O.engines = [w.ForceResetter(), w.InsertionSortCollider([w.Bo1_Sphere_Aabb()]),
+                 w.InteractionLoop([w.Ig2_Sphere_Sphere_ScGeom()], [w.Ip2_FrictMat_FrictMat_FrictPhys()],
+                                   [w.Law2_ScGeom_FrictPhys_CundallStrack()]), w.NewtonIntegrator()]
+    O.dt = 1e-9
+    O.step()
+    states, ids = [b.state for b in O.bodies], list(range(n))
+    coords = yade._utils.coordsAndDisplacements
+    F = np.random.default_rng(0).normal(size=(n, 3)).tolist()
+    V3, add = yade.Vector3, O.forces.addF
+    paths = {
+        "read, each body's state": lambda: _rows(states[i].pos for i in ids),
+        "read, coordsAndDisplacements x 3": lambda: np.column_stack([np.asarray(coords(k)[0]) for k in range(3)]),
+        "add force, Vector3": lambda: [add(i, V3(*f)) for i, f in zip(ids, F)],
+        "add force, list": lambda: [add(i, f) for i, f in zip(ids, F)],
+        "YADE step (for comparison)": O.step,
+    }
+    out = {}
+    for name, fn in paths.items():
+        fn()
+        t = []
+        for _ in range(5):
+            t0 = time.perf_counter()
+            for _ in range(repeat):
+                fn()
+            t.append((time.perf_counter() - t0) / (repeat * n) * 1e6)
+        out[name] = statistics.median(t)
+    O.reset()
     return out
 
 
@@ -115,22 +155,29 @@ def main():
     ap.add_argument("--steps", type=int, default=20)
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--threads", type=int, nargs="+", default=[1, 2])
+    ap.add_argument("--noise", type=float, default=1e-4, help="random displacements / spacing")
     ap.add_argument("--runs", nargs="+", default=["beam_impact_coarse"])
     ap.add_argument("--dem", nargs="+", default=["liggghts", "yade", "lammps"])
     ap.add_argument("--run-set", action="append", default=[], metavar="KEY=VALUE",
                     help="for the runs, e.g. clock.t_end=2e-4 (ms per step do not need the whole run)")
     ap.add_argument("--skip-runs", action="store_true")
+    ap.add_argument("--yade-transfer", action="store_true",
+                    help="only the paths between numpy and YADE, us per particle (YADE owns this process's OpenMP)")
     ap.add_argument("--skip-kernels", action="store_true")
     a = ap.parse_args()
+    if a.yade_transfer:
+        for name, us in yade_transfer().items():
+            print(f"{name:<36}{us:8.2f} us per particle")
+        return
     if not a.skip_kernels:
-        print("law kernels alone, ns per bond-step (median of %d)" % a.repeat)
+        print(f"law kernels alone, ns per bond-step (median of {a.repeat}; noise {a.noise:g} x spacing)")
         print(f"{'family':<14}{'bonds':>10}" + "".join(f"{f'fused {t} thr':>14}" for t in a.threads)
               + f"{'reference':>12}{'ratio':>8}")
         for target in a.bonds:
             intra, inter, X = families(target)
             steps = max(3, int(a.steps * min(1.0, 1e5 / target)))
             for name, b in (("ply (Hoffman)", intra), ("interface 3D", inter)):
-                r = time_family(b, X, steps, a.repeat, a.threads)
+                r = time_family(b, X, steps, a.repeat, a.threads, a.noise)
                 best = min(r[f"fused_{t}"] for t in a.threads)
                 print(f"{name:<14}{r['bonds']:>10d}" + "".join(f"{r[f'fused_{t}']:>14.1f}" for t in a.threads)
                       + f"{r['reference']:>12.1f}{r['reference'] / best:>7.1f}x", flush=True)

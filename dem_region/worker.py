@@ -166,6 +166,10 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
                 state["F_model"][:] = 0.0
                 backend.read_positions(ids, state["X_model"])
                 conn.send(("ok",))
+            elif op == "models_flush":  # the orchestrator queries the engine after the models wrote
+                backend.add_forces(state["model_ids"], state["F_model"])
+                state["F_model"][:] = 0.0
+                conn.send(("ok",))
             elif op == "set_dt":
                 backend.set_dt(args[0])
                 conn.send(("ok",))

@@ -1,4 +1,12 @@
-import coupling  # noqa: F401  (first: it sets the BLAS threads before numpy loads)
+import os
+
+# one pytest-xdist worker per core already: the law kernels' parallel builds run on one thread
+# in each (two workers of two threads each on two cores wait at every barrier for a thread the
+# other worker preempted: a coupled seed test took 158 s in the suite against 23 s alone)
+if int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1")) > 1:
+    os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+
+import coupling  # noqa: E402, F401  (first: it sets the BLAS threads before numpy loads)
 import json
 from pathlib import Path
 

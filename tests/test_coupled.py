@@ -196,7 +196,8 @@ def test_bench_speed_against_error(tmp_path, monkeypatch, capsys):
     import json
     from coupling.cli import main
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
-    args = ["bench", "chain_consistency", "--sweep", "clock.substeps=1,2", "--qoi", "tip_displacement_max"]
+    args = ["bench", "chain_consistency", "--sweep", "clock.substeps=1,2", "--qoi", "tip_displacement_max",
+            "--dem", "yade"]  # (the last --dem given wins: b3 names two engines)
     assert main(args + ["--out", str(tmp_path / "b1")]) == 0
     r = json.loads((tmp_path / "b1" / "speed_error.json").read_text())
     assert not r["reference"]["cached"] and len(r["points"]) == 2

@@ -18,7 +18,7 @@ def _sets(items):
 
 @pytest.mark.parametrize("material", [GLASS, LIMESTONE], ids=["glass", "limestone"])
 def test_chung_ooi_1_two_spheres(femdem, material):
-    code, s, _ = femdem("run", "chung_ooi_1", *_sets(material))
+    code, s, _ = femdem("run", "chung_ooi_1", "--dem", "yade", *_sets(material))
     assert code == 0
     assert_checks(s)
     assert set(s["checks"]) == {"peak_force", "contact_duration", "max_overlap"}
@@ -26,7 +26,7 @@ def test_chung_ooi_1_two_spheres(femdem, material):
 
 @pytest.mark.parametrize("material", [AL, MG], ids=["al_alloy", "mg_alloy"])
 def test_chung_ooi_2_sphere_on_plane(femdem, material):
-    code, s, _ = femdem("run", "chung_ooi_2", *_sets(material))
+    code, s, _ = femdem("run", "chung_ooi_2", "--dem", "yade", *_sets(material))
     assert code == 0
     assert_checks(s)
     # the check's reference uses the stand-in sphere; the ideal plane (R* = R, E* = E/(1-nu^2))
@@ -42,7 +42,7 @@ def test_chung_ooi_2_sphere_on_plane(femdem, material):
 @pytest.mark.parametrize("material", [AL_OXIDE, CAST_IRON], ids=["al_oxide", "cast_iron"])
 @pytest.mark.parametrize("e", [0.1, 0.3, 0.5, 0.7, 0.9, 1.0])
 def test_chung_ooi_3_restitution(femdem, material, e):
-    code, s, _ = femdem("run", "chung_ooi_3", *_sets(material), "--set", f"impact.restitution={e}")
+    code, s, _ = femdem("run", "chung_ooi_3", "--dem", "yade", *_sets(material), "--set", f"impact.restitution={e}")
     assert code == 0
     assert_checks(s)
     assert s["energy"]["balance_error_rel"] < 0.01  # damping dissipation is booked, not lost
@@ -51,26 +51,26 @@ def test_chung_ooi_3_restitution(femdem, material, e):
 @pytest.mark.parametrize("kind", ["square", "hexagonal"])
 def test_bonded_block_modulus_calibration(femdem, kind, tmp_path, monkeypatch):
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
-    code, s, _ = femdem("run", "bonded_block_modulus", "--set", f"packing.kind={kind}")
+    code, s, _ = femdem("run", "bonded_block_modulus", "--dem", "yade", "--set", f"packing.kind={kind}")
     assert code == 0
     assert_checks(s)
     assert s["qoi"]["poisson"] == pytest.approx(1 / 3, abs=0.03)  # both lattices are isotropic, nu = 1/3
     # the cache is used the second time and gives the same calibration
-    code, s2, _ = femdem("run", "bonded_block_modulus", "--set", f"packing.kind={kind}")
+    code, s2, _ = femdem("run", "bonded_block_modulus", "--dem", "yade", "--set", f"packing.kind={kind}")
     assert s2["qoi"]["uncalibrated_modulus"] == s["qoi"]["uncalibrated_modulus"]
     assert list((tmp_path / "cache" / "femdem" / "calibration").glob("*.json"))
 
 
 def test_bond_strength(femdem, tmp_path, monkeypatch):
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
-    code, s, _ = femdem("run", "bond_strength")
+    code, s, _ = femdem("run", "bond_strength", "--dem", "yade")
     assert code == 0
     assert_checks(s)
 
 
 def test_bonded_beam_bending(femdem, tmp_path, monkeypatch):
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
-    code, s, _ = femdem("run", "bonded_beam_bending")
+    code, s, _ = femdem("run", "bonded_beam_bending", "--dem", "yade")
     assert code == 0
     assert_checks(s)
 

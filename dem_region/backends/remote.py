@@ -56,6 +56,7 @@ class RemoteBackend:
         self._row = np.zeros(0, int)  # particle id -> its row in F / V, -1 if not an interface particle
         self._added_here = None  # (len(ids), 3) N added to interface particles during this hook
         self._model_ids = None  # the coupling-layer models' particles, read and written in shared memory
+        self._models_pending = False  # their forces written this hook, not yet applied by the worker
 
     def _launch_ranks(self, python: str, engine: str, env: dict) -> socket.socket:
         mpiexec = Path(python).parent / "mpiexec"
@@ -103,6 +104,9 @@ class RemoteBackend:
             raise self._died() from None
 
     def _call(self, *msg):
+        if self._models_pending:  # a query after the models' bulk write sees their forces applied
+            self._models_pending = False
+            self._call("models_flush")
         self._send(msg)
         reply = self._recv()
         if reply[0] == "error":
@@ -142,6 +146,7 @@ class RemoteBackend:
             msg = self._recv()
             if msg[0] == "hook":
                 self._added_here = None  # the worker's F was taken before this hook's additions
+                self._models_pending = False
                 if between is not None:
                     t1 = clock()
                     between()
@@ -215,6 +220,7 @@ class RemoteBackend:
     def add_forces(self, ids: np.ndarray, F: np.ndarray) -> None:
         if ids is self._model_ids:  # the models' bulk write: applied by the worker when the hook returns
             self._F_model[:] = F
+            self._models_pending = True
             src, rows = self._model_tied
             if len(rows):
                 self._tied_forces(rows, np.asarray(F, float)[src])
