@@ -132,11 +132,8 @@ class RemoteBackend:
         self.ids = self.prescribed = np.asarray(ids, int)
         self._row = np.full(int(self.ids.max()) + 1 if len(self.ids) else 0, -1)
         self._row[self.ids] = np.arange(len(self.ids))
-        nbytes = max(8, 8 * 3 * len(self.ids))
-        blocks = [shared_memory.SharedMemory(create=True, size=nbytes) for _ in range(2)]
-        self.blocks += blocks
-        self.F, self.V = (np.ndarray((len(self.ids), 3), dtype=np.float64, buffer=b.buf) for b in blocks)
-        self._call("prescribe", self.ids.tolist(), blocks[0].name, blocks[1].name)
+        names, (self.F, self.V) = self._shared_pair(len(self.ids))
+        self._call("prescribe", self.ids.tolist(), *names)
 
     def _run(self, op: str, between: Callable[[], None] | None, n: int = 1) -> None:
         clock = time.perf_counter
@@ -195,12 +192,15 @@ class RemoteBackend:
             self._share_model_particles(ids)
         out[:] = self._X_model
 
-    def _share_model_particles(self, ids: np.ndarray) -> None:
-        nbytes = max(8, 8 * 3 * len(ids))
-        blocks = [shared_memory.SharedMemory(create=True, size=nbytes) for _ in range(2)]
+    def _shared_pair(self, k: int) -> tuple[list[str], list[np.ndarray]]:
+        """Two new shared-memory blocks of (k, 3) float64 (released by finalize): names, arrays."""
+        blocks = [shared_memory.SharedMemory(create=True, size=max(8, 8 * 3 * k)) for _ in range(2)]
         self.blocks += blocks
-        self._X_model, self._F_model = (np.ndarray((len(ids), 3), dtype=np.float64, buffer=b.buf) for b in blocks)
-        self._call("models", np.asarray(ids).tolist(), blocks[0].name, blocks[1].name)
+        return [b.name for b in blocks], [np.ndarray((k, 3), dtype=np.float64, buffer=b.buf) for b in blocks]
+
+    def _share_model_particles(self, ids: np.ndarray) -> None:
+        names, (self._X_model, self._F_model) = self._shared_pair(len(ids))
+        self._call("models", np.asarray(ids).tolist(), *names)
         self._model_ids = ids
         rows = self._rows_of(np.asarray(ids, int))
         self._model_tied = np.flatnonzero(rows >= 0), rows[rows >= 0]  # model rows on interface particles
