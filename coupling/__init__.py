@@ -1,7 +1,34 @@
 """The orchestrator: case files, the coupled clock, scenes, outputs and the command line."""
 import os
+import tempfile
+from pathlib import Path
 
 # One BLAS thread: the orchestrator's matrices are small, and OpenBLAS's second thread spins
 # on the core an in-process engine or the LAMMPS worker needs (measured on beam_impact_3d_coarse:
 # 24 s of system time in a 28 s run, 9 % slower). Set before numpy loads OpenBLAS.
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+
+def _user_cache() -> Path:
+    """A cache directory this user can write: $FEMDEM_CACHE_DIR, else $XDG_CACHE_HOME/femdem or
+    ~/.cache/femdem, else (no writable home, e.g. a service account) one in the temporary
+    directory, per user."""
+    given = os.environ.get("FEMDEM_CACHE_DIR")
+    home = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "femdem"
+    for d in ([Path(given)] if given else []) + [home, Path(tempfile.gettempdir()) / f"femdem-cache-{os.getuid()}"]:
+        try:
+            d.mkdir(parents=True, exist_ok=True)
+            if os.access(d, os.W_OK | os.X_OK):
+                return d
+        except OSError:
+            continue
+    raise SystemExit("femdem: no writable cache directory (set FEMDEM_CACHE_DIR to one)")
+
+
+# numba caches compiled kernels next to the sources by default: not writable for an ordinary
+# user of a system-wide install, and with no writable home numba fails at import. Set before
+# any package imports numba; engine worker processes inherit it.
+CACHE = _user_cache()
+os.environ["FEMDEM_CACHE_DIR"] = str(CACHE)
+os.environ.setdefault("NUMBA_CACHE_DIR", str(CACHE / "numba"))
+os.environ.setdefault("MPLCONFIGDIR", str(CACHE / "matplotlib"))

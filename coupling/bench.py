@@ -23,7 +23,8 @@ from .run import execute
 
 
 def _cache_dir() -> Path:
-    return Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "femdem" / "references"
+    from . import CACHE
+    return CACHE / "references"
 
 
 def _key(parameters: dict, mode: str, dem: str) -> str:
@@ -36,9 +37,12 @@ def parse_sweep(items: list[str]) -> dict[str, list[str]]:
     out = {}
     for item in items:
         key, sep, values = item.partition("=")
-        if not sep or not values:
-            raise CaseError(f"--sweep {item!r}: expected key=v1,v2,... with a dotted key")
-        out[key.strip()] = [v.strip() for v in values.split(",") if v.strip()]
+        values = [v.strip() for v in values.split(",")]
+        if not sep or not key.strip() or not all(values):
+            raise CaseError(f"--sweep {item!r}: expected key=v1,v2,... with a dotted key and no empty value")
+        if key.strip() in out:
+            raise CaseError(f"--sweep {key.strip()}: given twice; allowed: one --sweep per key")
+        out[key.strip()] = values
     return out
 
 
@@ -68,12 +72,38 @@ def pareto(times: np.ndarray, errors: np.ndarray) -> np.ndarray:
     return np.array(idx, int)
 
 
+def points(case_name: str, sweep: dict[str, list[str]], base: dict, ref_mode: str, ref_set: dict, dem: str,
+           mode: str) -> list[tuple[str, dict]]:
+    """(engine, overrides) of every sweep point, each loaded and checked (and the reference's)
+    before any runs: a bad value in the last point must not cost the first ones' time."""
+    from .case import ENGINES, MODES, refuse_ineffective
+    engines = dem.split(",")
+    bad = [e for e in engines if e not in ENGINES]
+    if bad or len(set(engines)) < len(engines):
+        raise CaseError(f"--dem {dem}: allowed one or more different engines of {', '.join(ENGINES)}, "
+                        "separated by commas")
+    for flag, m in (("--mode", mode), ("--reference-mode", ref_mode)):
+        if m not in MODES:
+            raise CaseError(f"{flag} {m}: allowed {', '.join(MODES)}")
+    keys = list(sweep)
+    todo = [(ref_mode, engines[0], {**base, **ref_set})]
+    todo += [(mode, e, {**base, **dict(zip(keys, combo))})
+             for e, combo in itertools.product(engines, itertools.product(*(sweep[k] for k in keys)))]
+    for m, engine, sets in todo:
+        case = load_case(case_name, sets)
+        if m not in case.scene.MODES:
+            raise CaseError(f"--mode {m}: case {case.name} supports {', '.join(case.scene.MODES)}")
+        refuse_ineffective(case, m, engine if m != "fem" else None)
+    return [(e, s) for _, e, s in todo[1:]]
+
+
 def bench(case_name: str, sweep: dict[str, list[str]], base: dict, ref_mode: str, ref_set: dict, dem: str,
           mode: str, out: Path, qoi: list[str] | None = None) -> dict:
     """Run the sweep; dem: one engine or several separated by commas (an axis of the sweep:
     one curve each; the reference runs on the first); qoi: names compared with the reference
     (default: every qoi both runs report whose name does not end in _rel, since those are
     already error measures)."""
+    points(case_name, sweep, base, ref_mode, ref_set, dem, mode)
     out.mkdir(parents=True, exist_ok=True)
     engines = dem.split(",")
     if mode != "fem" or ref_mode != "fem":  # import the engine once, so no run pays for it
@@ -136,14 +166,9 @@ def cli(args) -> int:
     sweep = parse_sweep(args.sweep)
     base = parse_set(args.set)
     ref_set = parse_set(args.reference_set)
-    out = Path(args.out or f"runs/bench-{Path(args.case).stem}")
-    if out.exists() and any(out.iterdir()):
-        raise CaseError(f"--out {out}: directory exists and is not empty; allowed: a new or empty directory")
-    from .case import ENGINES
-    bad = [e for e in args.dem.split(",") if e not in ENGINES]
-    if bad:
-        raise CaseError(f"--dem {args.dem}: {bad[0]} is not an engine; allowed one or more of "
-                        f"{', '.join(ENGINES)}, separated by commas")
+    points(args.case, sweep, base, args.reference_mode, ref_set, args.dem, args.mode)
+    from .run import study_dir
+    out = study_dir(args.out, f"bench-{Path(args.case).stem}")
     r = bench(args.case, sweep, base, args.reference_mode, ref_set, args.dem, args.mode, out, args.qoi or None)
     print(f"reference: --mode {r['reference']['mode']} {r['reference']['set'] or ''} "
           f"({'cached' if r['reference']['cached'] else 'run'}, {r['reference']['wall_s']:.2f} s)")

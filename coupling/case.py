@@ -6,6 +6,7 @@ whose flat dotted keys (``material.E``) the scene declares. Bundled cases live u
 """
 from __future__ import annotations
 
+import re
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
@@ -17,12 +18,17 @@ from .scenes import SCENES, Scene
 CASES_DIR = Path(__file__).resolve().parent.parent / "cases"
 MODES = ("coupled", "fem", "dem")
 ENGINES = ("yade", "liggghts", "lammps")
+DEFAULT_ENGINE = "liggghts"  # the fastest path (README "Engines")
+CASE_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]{0,99}")
 
 # Parameters every scene has (the clock, outputs and run-time guards).
 COMMON: dict[str, Param] = {
     "clock.safety": Param(0.9, "fraction of the stable step used", low=0.0, high=1.0, open_low=True),
     "clock.dt": Param(0.0, "time step; 0 = safety x stable step; above the stable step is refused", unit="s", low=0.0),
     "clock.t_end": Param(0.0, "end time; 0 = the scene's own default", unit="s", low=0.0),
+    "clock.max_steps": Param(10_000_000, "largest number of clock steps a run may take (a run that "
+                             "needs more is refused before it starts, with its estimate)", kind="int", low=1,
+                             high=10**12),
     "clock.substeps": Param(0, "DEM steps per FEM step; 0 = automatic", kind="int", low=0, high=1000),
     "output.history_every": Param(0, "clock steps between history samples; 0 = about 1000 samples", kind="int", low=0),
     "output.field_frames": Param(20, "number of XDMF frames", kind="int", low=0, high=10000),
@@ -46,6 +52,7 @@ class Case:
     parameters: dict[str, Any]
     path: Path
     description: str
+    given: frozenset = frozenset()  # keys set by --set (the case file's own are meant for every mode)
 
 
 def bundled_cases() -> dict[str, Path]:
@@ -55,7 +62,9 @@ def bundled_cases() -> dict[str, Path]:
 
 def find_case(name_or_path: str) -> Path:
     p = Path(name_or_path)
-    if p.suffix == ".toml" or p.exists():
+    if p.suffix == ".toml" or p.exists() or "/" in name_or_path:
+        if p.is_dir():
+            raise CaseError(f"CASE = {name_or_path!r}: is a directory; allowed: a case file (.toml) or a bundled case name")
         if not p.is_file():
             raise CaseError(f"CASE = {name_or_path!r}: no such case file")
         return p
@@ -69,10 +78,7 @@ def find_case(name_or_path: str) -> Path:
 def load_case(name_or_path: str, overrides: dict[str, Any] | None = None) -> Case:
     """Read, validate and resolve a case; ``overrides`` are --set values (strings allowed)."""
     path = find_case(name_or_path)
-    try:
-        data = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise CaseError(f"{path}: not valid TOML ({exc})") from None
+    data = _parse(path)
     meta = data.pop("case", None)
     if not isinstance(meta, dict) or "scene" not in meta:
         raise CaseError(f"{path}: case.scene missing; allowed scenes: {', '.join(SCENES)}")
@@ -80,12 +86,64 @@ def load_case(name_or_path: str, overrides: dict[str, Any] | None = None) -> Cas
     if extra:
         raise CaseError(f"case.{sorted(extra)[0]}: unknown key in {path.name}; allowed: scene, name, description")
     scene_name = meta["scene"]
-    if scene_name not in SCENES:
+    if not isinstance(scene_name, str) or scene_name not in SCENES:
         raise CaseError(f"case.scene = {scene_name!r}: allowed {', '.join(SCENES)}")
+    for key in ("name", "description"):
+        if not isinstance(meta.get(key, ""), str):
+            raise CaseError(f"case.{key} = {meta[key]!r}: expected a string")
+    name = meta.get("name", path.stem)
+    if not CASE_NAME.fullmatch(name):
+        # the name becomes the run directory's: never a path, never outside runs/
+        raise CaseError(f"case.name = {name!r}: allowed letters, digits and _ . - (not first), "
+                        "at most 100 characters")
     scene = SCENES[scene_name]
     schema = {**COMMON, **scene.PARAMETERS}
     params = resolve(schema, flatten(data), f"case file {path.name}")
     if overrides:
         resolve(schema, overrides, "--set")  # unknown keys, bad values
         params.update({k: schema[k].coerce(k, v) for k, v in overrides.items()})
-    return Case(meta.get("name", path.stem), scene, params, path, meta.get("description", ""))
+    return Case(name, scene, params, path.absolute(), meta.get("description", ""), frozenset(overrides or ()))
+
+
+def refuse_ineffective(case: Case, mode: str, dem: str | None) -> None:
+    """CaseError for a setting that would change nothing in this configuration (a user who
+    sets it expects an effect): DEM and coupling keys of --set in a run without them, a
+    penalty stiffness with the kinematic tie."""
+    p = case.parameters
+    if mode == "fem" and dem is not None:
+        raise CaseError(f"--dem {dem}: --mode fem runs no DEM engine; allowed: leave --dem out")
+    no_dem = ("dem.", "particle.", "interface.tie", "clock.substeps")
+    no_tie = ("interface.tie", "clock.substeps")
+    schema = {**COMMON, **case.scene.PARAMETERS}
+    for key in sorted(k for k in case.given if p[k] != schema[k].default):  # the default changes nothing
+        if mode == "fem" and key.startswith(no_dem) or mode == "dem" and key.startswith(no_tie):
+            raise CaseError(f"{key}: has no effect in --mode {mode} (no {'DEM zone' if mode == 'fem' else 'FEM-DEM tie'}); "
+                            "allowed: leave it out, or another --mode")
+    if p.get("interface.tie") == "kinematic" and p.get("interface.tie_penalty"):
+        raise CaseError(f"interface.tie_penalty = {p['interface.tie_penalty']:g}: has no effect with "
+                        "interface.tie = 'kinematic'; allowed: 0, or interface.tie = 'penalty'")
+
+
+def _parse(path: Path) -> dict:
+    """The TOML tables of a case file: UTF-8 (TOML's encoding; a byte-order mark is dropped),
+    or UTF-16 / UTF-32 marked by their byte-order mark; anything else is refused."""
+    import codecs
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise CaseError(f"CASE = {str(path)!r}: cannot be read ({exc.strerror}); allowed: a readable case file") from None
+    for bom, enc in ((codecs.BOM_UTF32_LE, "utf-32"), (codecs.BOM_UTF32_BE, "utf-32"), (codecs.BOM_UTF8, "utf-8-sig"),
+                     (codecs.BOM_UTF16_LE, "utf-16"), (codecs.BOM_UTF16_BE, "utf-16")):
+        if raw.startswith(bom):
+            break
+    else:
+        enc = "utf-8"
+    try:
+        text = raw.decode(enc)
+    except UnicodeDecodeError as exc:
+        raise CaseError(f"CASE = {str(path)!r}: not {enc.upper()} text (byte {raw[exc.start]:#04x} at offset "
+                        f"{exc.start}); allowed: a UTF-8 TOML file") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise CaseError(f"CASE = {str(path)!r}: not valid TOML ({exc})") from None

@@ -57,11 +57,29 @@ def write(run_dir: Path, state: dict, engine_save=None) -> None:
 
 
 def latest(run_dir: Path) -> Path | None:
-    """The newest complete checkpoint directory of a run (or None)."""
+    """The newest complete checkpoint directory of a run (or None): one whose state.h5 opens
+    and holds the clock loop's and the simulation's state."""
     for name in ("checkpoint", "checkpoint.old"):
         d = Path(run_dir) / name
-        if (d / "state.h5").exists():
+        if _complete(d):
             return d
+    return None
+
+
+def _complete(d: Path) -> bool:
+    try:
+        with h5py.File(d / "state.h5", "r") as h5:
+            return "loop" in h5 and "simulation" in h5 and "step" in h5["loop"]
+    except (OSError, KeyError):
+        return False
+
+
+def corrupt(run_dir: Path) -> str | None:
+    """Which checkpoint file of a run is there but unreadable (for the error line), or None."""
+    for name in ("checkpoint", "checkpoint.old"):
+        f = Path(run_dir) / name / "state.h5"
+        if f.exists() and not _complete(f.parent):
+            return str(f)
     return None
 
 

@@ -7,10 +7,11 @@ detected instability.
 from __future__ import annotations
 
 import argparse
-import json
+import os
 import sys
+from pathlib import Path
 
-from .case import ENGINES, MODES, bundled_cases, load_case
+from .case import DEFAULT_ENGINE, ENGINES, MODES, bundled_cases, load_case
 from .params import CaseError, parse_set
 
 
@@ -30,7 +31,7 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("case", nargs="?", help="bundled case name or path to a .toml case file")
     # LIGGGHTS by default: the fastest path (zero-copy arrays; YADE's per-particle Python calls
     # cost ~2 us per particle and step, more than its own step: README "Engines")
-    r.add_argument("--dem", default="liggghts", help=f"DEM engine: {', '.join(ENGINES)} (default liggghts)")
+    r.add_argument("--dem", default=None, help=f"DEM engine: {', '.join(ENGINES)} (default {DEFAULT_ENGINE})")
     r.add_argument("--mode", default=None, help=f"{', '.join(MODES)} (default: the case's first mode)")
     r.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="override a parameter by its dotted key (as echoed in summary.json)")
@@ -58,6 +59,33 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Exit codes as in the module docstring; no traceback reaches the terminal: an unforeseen
+    error prints one line and leaves its traceback in a log file."""
+    try:
+        return _main(argv)
+    except KeyboardInterrupt:
+        print("femdem: interrupted", file=sys.stderr)
+        return 130
+    except BrokenPipeError:  # output piped into head & co.: the reader left, nothing to report
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
+    except Exception as exc:  # a defect: one line here, the traceback in a log
+        log = _log_traceback()
+        print(f"femdem: internal error: {type(exc).__name__}: {exc} (traceback in {log})", file=sys.stderr)
+        return 1
+
+
+def _log_traceback() -> Path:
+    import datetime
+    import traceback
+    from . import CACHE
+    log = CACHE / "logs" / f"femdem-{datetime.datetime.now():%Y%m%d-%H%M%S}-{os.getpid()}.log"
+    log.parent.mkdir(parents=True, exist_ok=True)
+    log.write_text(f"femdem {' '.join(sys.argv[1:])}\n{traceback.format_exc()}")
+    return log
+
+
+def _main(argv: list[str] | None) -> int:
     args = _parser().parse_args(argv)
     try:
         if args.command == "doctor":
@@ -90,21 +118,27 @@ def _cases() -> int:
 
 
 def _run(args) -> int:
+    from .case import refuse_ineffective
     from .run import execute, resume
     if args.resume:
+        ignored = [f"--{k}" for k in ("dem", "mode", "set", "out") if getattr(args, k)] + (["CASE"] if args.case else [])
+        if ignored:
+            raise CaseError(f"--resume {args.resume}: {ignored[0]} would be ignored (a resumed run keeps its case, "
+                            "engine, mode, parameters and directory); allowed: --resume DIR [--quiet]")
         code, out, summary = resume(args.resume, args.quiet)
         if not args.quiet or code:
             _report(summary, out)
         return code
     if not args.case:
         raise CaseError("CASE: missing; allowed: a bundled case name, a .toml path, or --resume DIR")
-    if args.dem not in ENGINES:
+    if args.dem is not None and args.dem not in ENGINES:
         raise CaseError(f"--dem {args.dem}: allowed {', '.join(ENGINES)}")
     case = load_case(args.case, parse_set(args.set))
     mode = args.mode or case.scene.MODES[0]
     if mode not in MODES:
         raise CaseError(f"--mode {mode}: allowed {', '.join(MODES)}")
-    code, out, summary = execute(case, mode, args.dem, args.out, args.quiet)
+    refuse_ineffective(case, mode, args.dem)
+    code, out, summary = execute(case, mode, args.dem or DEFAULT_ENGINE, args.out, args.quiet)
     if not args.quiet or code:
         _report(summary, out)
     return code

@@ -9,20 +9,29 @@ import json
 import os
 from pathlib import Path
 
-from .case import ENGINES, load_case
+from .case import ENGINES, load_case, refuse_ineffective
 from .params import CaseError, parse_set
-from .run import execute
+from .run import execute, study_dir
 
 
-def compare(case_name: str, engines: list[str], sets: dict, mode: str | None, out: Path) -> dict:
+def plan(case_name: str, engines: list[str], sets: dict, mode: str | None) -> tuple:
+    """(case, mode) of a comparison, every input checked before anything runs or is written."""
     bad = [e for e in engines if e not in ENGINES]
-    if bad or len(engines) < 2:
-        raise CaseError(f"--dem {','.join(engines)}: allowed two or more of {', '.join(ENGINES)}, comma separated")
+    if bad or len(engines) < 2 or len(set(engines)) < len(engines):
+        raise CaseError(f"--dem {','.join(engines)}: allowed two or more different engines of {', '.join(ENGINES)}, "
+                        "comma separated")
     case = load_case(case_name, sets)
     mode = mode or case.scene.MODES[0]
     if mode == "fem":
         raise CaseError(f"--mode {mode}: an FEM-only run uses no DEM engine; allowed coupled or dem")
-    out.mkdir(parents=True, exist_ok=True)
+    if mode not in case.scene.MODES:
+        raise CaseError(f"--mode {mode}: case {case.name} supports {', '.join(case.scene.MODES)}")
+    refuse_ineffective(case, mode, engines[0])
+    return case, mode
+
+
+def compare(case_name: str, engines: list[str], sets: dict, mode: str | None, out: Path) -> dict:
+    case, mode = plan(case_name, engines, sets, mode)
     runs = {}
     for engine in engines:
         code, _, s = execute(load_case(case_name, sets), mode, engine, out / engine, quiet=True)
@@ -46,10 +55,10 @@ def compare(case_name: str, engines: list[str], sets: dict, mode: str | None, ou
 
 
 def cli(args) -> int:
-    out = Path(args.out or f"runs/compare-{Path(args.case).stem}")
-    if out.exists() and any(out.iterdir()):
-        raise CaseError(f"--out {out}: directory exists and is not empty; allowed: a new or empty directory")
-    r = compare(args.case, [e.strip() for e in args.dem.split(",") if e.strip()], parse_set(args.set), args.mode, out)
+    engines, sets = [e.strip() for e in args.dem.split(",")], parse_set(args.set)
+    plan(args.case, engines, sets, args.mode)
+    out = study_dir(args.out, f"compare-{Path(args.case).stem}")
+    r = compare(args.case, engines, sets, args.mode, out)
     width = max(len(row["qoi"]) for row in r["rows"]) if r["rows"] else 4
     print(f"{r['case']} ({r['mode']}):")
     print(f"  {'qoi':{width}s}  " + "  ".join(f"{e:>14s}" for e in r["engines"]) + "  max rel. diff")
@@ -61,4 +70,5 @@ def cli(args) -> int:
     print(f"  {'checks passed':{width}s}  " + "  ".join(f"{str(r['checks_passed'][e]):>14s}" for e in r["engines"]))
     print(f"  {'wall time [s]':{width}s}  " + "  ".join(f"{r['wall_s'][e]:14.3f}" for e in r["engines"]))
     print(f"  results: {out}/compare.json")
-    return 0 if all(s == "ok" for s in r["status"].values()) else 3
+    status = set(r["status"].values())
+    return 1 if "error" in status else 3 if "unstable" in status else 0

@@ -18,6 +18,10 @@ import numpy as np
 
 from .simulation import FieldFrame
 
+# engines' scratch files (data file, log) inside the run directory, so a killed run leaves
+# nothing in /tmp (dem_region.backends.base.scratch_dir reads FEMDEM_SCRATCH_DIR)
+SCRATCH = "engine-scratch"
+
 
 @contextmanager
 def _cwd(path: Path):
@@ -31,16 +35,35 @@ def _cwd(path: Path):
 
 
 class RunOutput:
-    """Writer for one run directory: fields over time, then history, summary and plots."""
+    """Writer for one run directory: fields over time, then history, summary and plots.
 
-    def __init__(self, final_dir: Path, resume: bool = False):
-        self.final = Path(final_dir)
-        if self.final.exists() and any(self.final.iterdir()):
-            raise FileExistsError(str(self.final))
-        self.dir = self.final.with_name(self.final.name + ".partial")
-        if self.dir.exists() and not resume:
-            shutil.rmtree(self.dir)
-        (self.dir / "plots").mkdir(parents=True, exist_ok=True)
+    The ``.partial`` directory is created with one mkdir, which fails when another run holds
+    it, so two runs never share or delete each other's directories. With ``unique`` (the
+    default --out) a clash adds ``-2``, ``-3``, ... to the name instead of failing.
+    """
+
+    def __init__(self, final_dir: Path, resume: bool = False, unique: bool = False):
+        final = Path(final_dir).absolute()  # a worker process writes here from its own cwd
+        for n in range(2, 10_000):
+            self.final, self.dir = final, final.with_name(final.name + ".partial")
+            if resume:
+                if not self.dir.is_dir():
+                    raise FileNotFoundError(str(self.dir))
+                break
+            if self.final.exists() and (not self.final.is_dir() or any(self.final.iterdir())):
+                if unique:
+                    final = Path(f"{final_dir}-{n}").absolute()
+                    continue
+                raise FileExistsError(str(self.final))
+            try:
+                self.dir.parent.mkdir(parents=True, exist_ok=True)
+                self.dir.mkdir()
+                break
+            except FileExistsError:
+                if not unique:
+                    raise FileExistsError(str(self.dir)) from None
+                final = Path(f"{final_dir}-{n}").absolute()
+        (self.dir / "plots").mkdir(exist_ok=True)
         self._xdmf = None
 
     def frame(self, t: float, f: FieldFrame) -> None:
@@ -67,8 +90,9 @@ class RunOutput:
         os.replace(tmp, self.dir / "summary.json")
         for name in ("checkpoint.old", "checkpoint.tmp") + (() if keep_checkpoint else ("checkpoint",)):
             shutil.rmtree(self.dir / name, ignore_errors=True)
+        shutil.rmtree(self.dir / SCRATCH, ignore_errors=True)
         if self.final.exists():
-            self.final.rmdir()  # empty (checked in __init__)
+            self.final.rmdir()  # empty (checked in __init__); fails rather than merge into another run's
         os.replace(self.dir, self.final)
         return self.final
 

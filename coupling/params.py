@@ -153,7 +153,10 @@ def parse_set(items: list[str]) -> dict[str, Any]:
     out = {}
     for item in items:
         key, sep, value = item.partition("=")
-        if not sep or not key.strip():
-            raise CaseError(f"--set {item!r}: expected key=value with a dotted key, e.g. material.E=7e10")
+        if not sep or not key.strip() or not value.strip():
+            raise CaseError(f"--set {item!r}: expected key=value with a dotted key and a value, e.g. material.E=7e10")
+        if key.strip() in out and out[key.strip()] != value.strip():
+            raise CaseError(f"--set {key.strip()}: given twice ({out[key.strip()]!r}, {value.strip()!r}); "
+                            "allowed: one value per key")
         out[key.strip()] = value.strip()
     return out

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import datetime as dt
+import os
 import platform
 import resource
 import sys
@@ -10,14 +11,15 @@ from pathlib import Path
 
 from . import checkpoint
 from .case import Case
-from .output import RunOutput
+from .output import SCRATCH, RunOutput
 from .params import CaseError
 from .simulation import Instability, run_clock
 
 
-def default_out(case: Case, mode: str) -> Path:
+def default_out(case: Case, mode: str, dem: str) -> Path:
+    """runs/<case>-<mode>[-<engine>]-<time>; RunOutput adds -2, -3, ... on a clash."""
     stamp = dt.datetime.now().strftime("%Y%m%d-%H%M%S")
-    return Path("runs") / f"{case.name}-{mode}-{stamp}"
+    return Path("runs") / "-".join([case.name, mode, *([dem] if mode != "fem" else []), stamp])
 
 
 def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool,
@@ -27,18 +29,20 @@ def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool,
     scene = case.scene
     if mode not in scene.MODES:
         raise CaseError(f"--mode {mode}: case {case.name} supports {', '.join(scene.MODES)}")
-    out = Path(out) if out else default_out(case, mode)
-    try:
-        writer = RunOutput(out, resume=resume_from is not None)
-    except FileExistsError:
-        raise CaseError(f"--out {out}: directory exists and is not empty; allowed: a new or empty directory") from None
+    writer = open_output(out or default_out(case, mode, dem), resume_from is not None, unique=not out)
     checkpoint.write_run_info(writer.dir, {"case": case.name, "case_file": str(case.path), "mode": mode, "dem": dem,
                                            "parameters": case.parameters})
     t_start = time.perf_counter()
+    os.environ["FEMDEM_SCRATCH_DIR"] = str(writer.dir / SCRATCH)  # engines' files stay in the run
     sim, result, qoi, checks = None, None, {}, {}
     status, message = "ok", ""
     try:
         sim = scene.build(case.parameters, mode, dem)
+        limit = case.parameters["clock.max_steps"]
+        if sim.n_steps > limit:
+            raise CaseError(f"clock.max_steps = {limit}: this run needs {sim.n_steps:,} clock steps "
+                            f"({sim.n_steps * sim.dt:.4g} s at dt = {sim.dt:.4g} s); allowed: raise clock.max_steps, "
+                            "or shorten clock.t_end")
         bar = _progress(sim, quiet)
         try:
             every = case.parameters["output.checkpoint_every"] or (sim.n_steps // 10 if sim.n_steps >= 5000 else 0)
@@ -59,10 +63,13 @@ def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool,
             writer_cleanup(writer)
         raise
     except Exception as exc:  # a defect or an engine failure: say so in the run directory too
-        status, message = "error", f"{type(exc).__name__}: {exc}"
+        import traceback
+        (writer.dir / "error.log").write_text(traceback.format_exc())
+        status, message = "error", f"{type(exc).__name__}: {exc} (traceback in {writer.final / 'error.log'})"
     finally:
         if sim is not None:
             sim.close()
+        os.environ.pop("FEMDEM_SCRATCH_DIR", None)
     result = result or {"history": {}, "timing_s": {}, "energy": {}, "steps": 0}
     summary = {
         "case": case.name, "case_file": str(case.path), "scene": scene.NAME, "mode": mode,
@@ -77,6 +84,51 @@ def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool,
     }
     final = writer.finish(summary, result["history"], keep_checkpoint=status != "ok")
     return {"ok": 0, "unstable": 3, "error": 1}[status], final, summary
+
+
+def open_output(out: Path, resume: bool, unique: bool) -> RunOutput:
+    """The run's writer, or a one-line CaseError for a --out that cannot hold a run."""
+    out = Path(out)
+    try:
+        return RunOutput(out, resume=resume, unique=unique)
+    except FileExistsError as exc:
+        if str(exc).endswith(".partial"):
+            raise CaseError(f"--out {out}: {exc} exists (a run in progress, or stopped: continue it with "
+                            f"--resume {exc}); allowed: a new or empty directory") from None
+        raise CaseError(f"--out {out}: exists and is not an empty directory; allowed: a new or empty directory") from None
+    except NotADirectoryError:
+        raise CaseError(f"--out {out}: a parent of it is a file; allowed: a directory path") from None
+    except PermissionError:
+        raise CaseError(f"--out {out}: not writable by this user; allowed: a directory you can write") from None
+    except OSError as exc:
+        raise CaseError(f"--out {out}: cannot be created ({exc.strerror}); allowed: a writable directory path") from None
+
+
+def study_dir(out: str | None, name: str) -> Path:
+    """The directory of a bench or compare study: --out (new or empty), or runs/<name>-<time>
+    made unique; created here, atomically, so two studies never share one."""
+    if out:
+        out = Path(out).absolute()
+        if out.exists() and (not out.is_dir() or any(out.iterdir())):
+            raise CaseError(f"--out {out}: exists and is not an empty directory; allowed: a new or empty directory")
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise CaseError(f"--out {out}: cannot be created ({exc.strerror}); allowed: a writable directory path") from None
+        return out
+    base = Path("runs").absolute() / f"{name}-{dt.datetime.now():%Y%m%d-%H%M%S}"
+    for n in range(1, 10_000):
+        d = base if n == 1 else base.with_name(f"{base.name}-{n}")
+        try:
+            d.parent.mkdir(parents=True, exist_ok=True)
+            d.mkdir()
+            return d
+        except FileExistsError:
+            continue
+        except OSError as exc:
+            raise CaseError(f"--out {d}: cannot be created ({exc.strerror}); allowed: a writable working "
+                            "directory, or --out DIR") from None
+    raise CaseError(f"--out {base}: no free name; allowed: --out DIR")
 
 
 def _memory_peak_mb() -> dict[str, float]:
@@ -117,19 +169,44 @@ def _versions() -> dict:
 
 
 def resume(run_dir: Path, quiet: bool) -> tuple[int, Path, dict]:
-    """Continue a run that was stopped (killed, or lost its machine) from its last checkpoint."""
+    """Continue a run that was stopped (killed, its engine worker killed, or its machine lost)
+    from its last checkpoint."""
+    import json
     from .case import load_case
-    run_dir = Path(run_dir)
+    run_dir = Path(run_dir).absolute()
     final = run_dir.with_name(run_dir.name[: -len(".partial")]) if run_dir.name.endswith(".partial") else run_dir
     partial = final.with_name(final.name + ".partial")
-    if (final / "summary.json").exists():
-        raise CaseError(f"--resume {run_dir}: this run finished; allowed: the directory of a stopped run")
+    where = f"--resume {run_dir}"
+    if (final / "summary.json").exists() and not partial.exists():
+        status = _read_json(final / "summary.json", where).get("status")
+        if status != "error" or checkpoint.latest(final) is None:
+            raise CaseError(f"{where}: this run finished ({status}); allowed: the directory of a stopped run "
+                            "(killed, or ended with an error and kept its checkpoint)")
+        # ended with an error (e.g. its engine worker was killed): back to .partial, continue
+        os.replace(final, partial)
+        os.replace(partial / "summary.json", partial / "summary.failed.json")
     info_path = partial / "run.json"
-    ck_dir = checkpoint.latest(partial) if partial.exists() else None
-    if not info_path.exists() or ck_dir is None:
-        raise CaseError(f"--resume {run_dir}: no checkpoint there; allowed: a run directory with checkpoint/ "
+    ck_dir = checkpoint.latest(partial) if partial.is_dir() else None
+    if ck_dir is None and partial.is_dir() and checkpoint.corrupt(partial):
+        raise CaseError(f"{where}: the checkpoint {checkpoint.corrupt(partial)} is corrupt (cannot be read); "
+                        "allowed: a run directory with a complete checkpoint")
+    if not info_path.is_file() or ck_dir is None:
+        raise CaseError(f"{where}: no checkpoint there; allowed: a run directory with checkpoint/ "
                         "(runs write one every output.checkpoint_every steps)")
-    import json
-    info = json.loads(info_path.read_text())
+    info = _read_json(info_path, where)
+    need = {"case_file": str, "mode": str, "dem": str, "parameters": dict}
+    bad = [k for k, t in need.items() if not isinstance(info, dict) or not isinstance(info.get(k), t)]
+    if bad:
+        raise CaseError(f"{where}: run.json is corrupt ({bad[0]} missing or of the wrong type); "
+                        "allowed: the run.json the run wrote")
     case = load_case(info["case_file"], info["parameters"])
     return execute(case, info["mode"], info["dem"], final, quiet, resume_from=ck_dir)
+
+
+def _read_json(path: Path, where: str):
+    import json
+    try:
+        return json.loads(path.read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise CaseError(f"{where}: {path.name} is corrupt or unreadable ({type(exc).__name__}); "
+                        "allowed: the file the run wrote") from None

@@ -66,7 +66,7 @@ PARAMETERS: dict[str, Param] = {
     "interface.friction": Param(0.0, "Coulomb friction of debonded faces in contact", low=0.0, high=2.0),
     "particle.radius": positive(0.13e-3, "DEM particle radius r (spacing d = 2r)", "m"),
     "mesh.elements_through": Param(3, "FEM elements through each arm outside the band", kind="int", low=1, high=40),
-    "mesh.element_length": positive(0.0, "FEM element length along the beam; 0 = 2 d", "m"),
+    "mesh.element_length": Param(0.0, "FEM element length along the beam; 0 = 2 d", unit="m", low=0.0),
     "load.ramp_time": Param(0.0, "time over which the load-point speed ramps up; 0 = two periods of the "
                             "cracked arm", unit="s", low=0.0),
     **{k: v for k, v in FEM_OPTIONS.items() if k not in ("mesh.element", "fem.hypothesis")},

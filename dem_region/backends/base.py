@@ -10,11 +10,24 @@ Array data moves in bulk: ids (k,) int, vectors (k, 3) SI.
 """
 from __future__ import annotations
 
+import os
+import tempfile
+from pathlib import Path
 from typing import Callable, Protocol
 
 import numpy as np
 
 from ..scene import DemScene
+
+
+def scratch_dir(engine: str) -> Path:
+    """A new directory for an engine's data file and log: under $FEMDEM_SCRATCH_DIR when the
+    orchestrator set it (inside the run directory, so a killed run leaves nothing in /tmp and
+    the log stays with the run), else in the system's temporary directory."""
+    root = os.environ.get("FEMDEM_SCRATCH_DIR")
+    if root:
+        os.makedirs(root, exist_ok=True)
+    return Path(tempfile.mkdtemp(prefix=f"{engine}-", dir=root or None))
 
 
 class EngineUnavailable(ValueError):

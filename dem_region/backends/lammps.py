@@ -32,13 +32,13 @@ from __future__ import annotations
 import ctypes
 import os
 import shutil
-import tempfile
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
 
 from ..scene import DemScene
+from .base import scratch_dir
 from .lammps_family import VerletArrays
 
 
@@ -68,7 +68,7 @@ class LammpsBackend(VerletArrays):
         if missing:
             raise NotImplementedError(f"lammps adapter: {missing} is not available on this engine yet")
         self.scene = scene
-        self.tmp = Path(tempfile.mkdtemp(prefix="femdem-lammps-"))
+        self.tmp = scratch_dir("lammps")
         screen = [] if os.environ.get("FEMDEM_LAMMPS_SCREEN") else ["-screen", "none"]
         kw = {"comm": self.comm} if self.comm is not None else {}
         self.lmp = self._lammps(cmdargs=["-log", str(self.tmp / "log.lammps"), *screen, "-nocite"], **kw)

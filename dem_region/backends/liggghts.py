@@ -31,12 +31,12 @@ from __future__ import annotations
 import ctypes
 import os
 import shutil
-import tempfile
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
 from ..scene import DemScene
+from .base import scratch_dir
 from .lammps_family import VerletArrays
 
 LIB = "libliggghts.so.3"
@@ -66,7 +66,7 @@ class LiggghtsBackend(VerletArrays):
         if missing:
             raise NotImplementedError(f"liggghts adapter: {missing} is not available on this engine yet")
         self.scene = scene
-        self.tmp = Path(tempfile.mkdtemp(prefix="femdem-liggghts-"))
+        self.tmp = scratch_dir("liggghts")
         # LIGGGHTS ends the process on an input error: its log (in the scene's temp dir, or on
         # screen with FEMDEM_LIGGGHTS_SCREEN=1) is where the reason is
         argv = [b"liggghts", b"-log", str(self.tmp / "log.liggghts").encode()]
