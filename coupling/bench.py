@@ -24,7 +24,7 @@ from .run import execute
 
 def _cache_dir() -> Path:
     from . import CACHE
-    return CACHE / "references"
+    return Path(os.environ.get("FEMDEM_CACHE_DIR") or CACHE) / "references"
 
 
 def _key(parameters: dict, mode: str, dem: str) -> str:
@@ -72,7 +72,7 @@ def pareto(times: np.ndarray, errors: np.ndarray) -> np.ndarray:
     return np.array(idx, int)
 
 
-def points(case_name: str, sweep: dict[str, list[str]], base: dict, ref_mode: str, ref_set: dict, dem: str,
+def sweep_points(case_name: str, sweep: dict[str, list[str]], base: dict, ref_mode: str, ref_set: dict, dem: str,
            mode: str) -> list[tuple[str, dict]]:
     """(engine, overrides) of every sweep point, each loaded and checked (and the reference's)
     before any runs: a bad value in the last point must not cost the first ones' time."""
@@ -103,7 +103,7 @@ def bench(case_name: str, sweep: dict[str, list[str]], base: dict, ref_mode: str
     one curve each; the reference runs on the first); qoi: names compared with the reference
     (default: every qoi both runs report whose name does not end in _rel, since those are
     already error measures)."""
-    points(case_name, sweep, base, ref_mode, ref_set, dem, mode)
+    sweep_points(case_name, sweep, base, ref_mode, ref_set, dem, mode)
     out.mkdir(parents=True, exist_ok=True)
     engines = dem.split(",")
     if mode != "fem" or ref_mode != "fem":  # import the engine once, so no run pays for it
@@ -166,7 +166,7 @@ def cli(args) -> int:
     sweep = parse_sweep(args.sweep)
     base = parse_set(args.set)
     ref_set = parse_set(args.reference_set)
-    points(args.case, sweep, base, args.reference_mode, ref_set, args.dem, args.mode)
+    sweep_points(args.case, sweep, base, args.reference_mode, ref_set, args.dem, args.mode)
     from .run import study_dir
     out = study_dir(args.out, f"bench-{Path(args.case).stem}")
     r = bench(args.case, sweep, base, args.reference_mode, ref_set, args.dem, args.mode, out, args.qoi or None)

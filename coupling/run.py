@@ -12,6 +12,8 @@ from pathlib import Path
 from . import checkpoint
 from .case import Case
 from .output import SCRATCH, RunOutput
+from fem_region.mesh import TooLarge
+
 from .params import CaseError
 from .simulation import Instability, run_clock
 
@@ -58,6 +60,12 @@ def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool,
             t0 = time.perf_counter()
             scene.plot(case.parameters, result["history"], qoi, writer.dir / "plots")
             result["timing_s"]["io"] += time.perf_counter() - t0
+    except (TooLarge, MemoryError) as exc:  # a model this machine cannot hold is bad input
+        if resume_from is None:
+            writer_cleanup(writer)
+        raise CaseError(str(exc) if isinstance(exc, TooLarge) else
+                        "the model does not fit in memory (numpy could not allocate it); allowed: coarser "
+                        "particle spacing or mesh, or a smaller zone") from None
     except CaseError:
         if resume_from is None:  # never delete the checkpoint a resume came for
             writer_cleanup(writer)

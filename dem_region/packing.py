@@ -9,6 +9,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from .scene import check_fits
+
 
 def hexagonal_2d(lo, hi, radius: float) -> np.ndarray:
     """(n, 3) centres of a triangular lattice (spacing 2r) whose spheres lie inside the
@@ -45,6 +47,8 @@ def square_bonds(x: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:
 
 def simple_cubic(lo, hi, radius: float) -> np.ndarray:
     """(n, 3) centres of a simple cubic lattice (spacing 2r) from lo to hi inclusive."""
+    counts = [np.floor((b - a) / (2 * radius) + 1e-9) + 1 for a, b in zip(lo, hi)]
+    check_fits(np.prod(counts), f"particle radius {radius:g} m over {np.subtract(hi, lo).tolist()} m")
     axes = [np.arange(a, b + 1e-9 * radius, 2 * radius) for a, b in zip(lo, hi)]
     return np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
 

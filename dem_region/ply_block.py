@@ -32,7 +32,7 @@ from scipy import optimize
 
 from .laws import HashinCohesiveLaw, PlyBondLaw
 from .ply_lattice import PlyMaterial
-from .scene import DemScene
+from .scene import DemScene, check_fits
 
 # the 13 bond directions of a cell: 3 axial, 6 face diagonals, as integer offsets
 AXIAL = ((1, 0, 0), (0, 1, 0), (0, 0, 1))
@@ -115,6 +115,7 @@ def build(origin, n_columns: tuple[int, int], rows_per_ply: list[int], angles: l
     nx, ny = n_columns
     ply_of_row = np.repeat(np.arange(len(rows_per_ply)), rows_per_ply)
     nz = len(ply_of_row)
+    check_fits(float(nx) * ny * nz, f"ply block of {nx} x {ny} x {nz} particles (spacing {d:g} m)")
     I, J, K = (a.ravel() for a in np.meshgrid(np.arange(nx), np.arange(ny), np.arange(nz), indexing="ij"))
     index = np.column_stack([I, J, K])
     x = np.asarray(origin, float) + d * (index + np.array([0.0, 0.0, 0.5]))

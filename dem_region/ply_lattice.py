@@ -24,6 +24,7 @@ import numpy as np
 from fem_region.failure import HoffmanStrengths
 
 from .laws import HashinCohesiveLaw, PlyBondLaw
+from .scene import check_fits
 
 
 @dataclass(frozen=True)
@@ -103,6 +104,7 @@ def build(x0: float, n_columns: int, y0: float, rows_per_ply: list[int], angles:
     rows_per_ply[0] rows in ply 0 (angle angles[0]) and so on."""
     ply_of_row = np.repeat(np.arange(len(rows_per_ply)), rows_per_ply)
     n_rows = len(ply_of_row)
+    check_fits(float(n_columns) * n_rows, f"ply lattice of {n_columns} x {n_rows} particles (spacing {d:g} m)")
     col, row = np.meshgrid(np.arange(n_columns), np.arange(n_rows), indexing="ij")
     col, row = col.ravel(), row.ravel()
     x = np.column_stack([x0 + d * col, y0 + d * (row + 0.5), np.zeros(col.size)])

@@ -10,6 +10,18 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from fem_region.mesh import TooLarge, check_fits as fits  # noqa: F401 (TooLarge: re-exported)
+
+
+# Peak memory per particle of a bonded lattice in a run (the orchestrator's arrays, the law
+# kernels' buffers and an engine's atoms, bonds and neighbour lists; ~13 bonds per particle).
+BYTES_PER_PARTICLE = 4096
+
+
+def check_fits(n: float, what: str) -> None:
+    """Refuse ``n`` particles before any array of them exists (fem_region.mesh.check_fits)."""
+    fits(n, BYTES_PER_PARTICLE, "particles", what)
+
 
 @dataclass
 class ElasticBond:

@@ -12,11 +12,36 @@ import skfem
 from .elements import ELEMENTS
 
 
+# Peak memory per node of a mesh in a run (coordinates, the sparse stiffness, element data,
+# the state vectors and the XDMF frames)
+BYTES_PER_NODE = 2048
+
+
+class TooLarge(ValueError):
+    """A model that cannot fit in this machine's memory (bad input: the message has the count
+    and the estimate)."""
+
+
+def check_fits(n: float, bytes_each: float, items: str, what: str) -> None:
+    """Refuse a model of ``n`` items (nodes, particles) before any array of them exists, when
+    n x bytes_each exceeds the memory available now (MemAvailable of /proc/meminfo)."""
+    need = float(n) * bytes_each
+    try:
+        with open("/proc/meminfo") as f:
+            avail = next(float(line.split()[1]) * 1024 for line in f if line.startswith("MemAvailable:"))
+    except (OSError, StopIteration):
+        return
+    if need > avail:
+        raise TooLarge(f"{what}: {n:.3g} {items} need about {need / 2**30:.3g} GiB, {avail / 2**30:.3g} GiB "
+                       "available; allowed: a coarser spacing or a smaller model")
+
+
 def graded(a: float, b: float, n: int, ratio: float = 1.0, toward: float | None = None) -> np.ndarray:
     """n + 1 coordinates on [a, b]; element size grows by ``ratio`` per element away from ``toward``.
 
     ratio = 1 gives a uniform spacing; toward = a point in [a, b] where the elements are smallest.
     """
+    check_fits(n, 8, "coordinates", f"{n} elements along one line")
     if ratio == 1.0 or toward is None:
         return np.linspace(a, b, n + 1)
     if not a <= toward <= b:
@@ -37,6 +62,7 @@ def rectangle(xs: np.ndarray, ys: np.ndarray, element: str = "quad4") -> skfem.M
     """Tensor-product 2D mesh on the coordinate lines xs, ys (m); element 'quad4' or 'tri3'."""
     if element not in ("quad4", "tri3"):
         raise ValueError(f"element {element!r}: 2D elements are quad4, tri3")
+    check_fits(float(len(xs)) * len(ys), BYTES_PER_NODE, "FEM nodes", f"a mesh of {len(xs) - 1} x {len(ys) - 1} elements")
     return ELEMENTS[element].mesh_cls.init_tensor(np.asarray(xs, float), np.asarray(ys, float))
 
 
@@ -70,6 +96,8 @@ def box(xs: np.ndarray, ys: np.ndarray, zs: np.ndarray, element: str = "hex8") -
     """Tensor-product 3D mesh; element 'hex8' or 'tet4'."""
     if element not in ("hex8", "tet4"):
         raise ValueError(f"element {element!r}: 3D elements are hex8, tet4")
+    check_fits(float(len(xs)) * len(ys) * len(zs), BYTES_PER_NODE, "FEM nodes",
+               f"a mesh of {len(xs) - 1} x {len(ys) - 1} x {len(zs) - 1} elements")
     return ELEMENTS[element].mesh_cls.init_tensor(*(np.asarray(c, float) for c in (xs, ys, zs)))
 
 

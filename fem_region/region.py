@@ -204,6 +204,36 @@ class FemRegion:
             f += self._scatter(self.hg.force(self.hg.k, u[self.mesh.t.T]), u.shape)
         return f
 
+    def element_force(self, elements: np.ndarray):
+        """The internal force of the elements ``elements`` (k,) alone, as a function
+        u (n_nodes, dim) m -> (n_nodes, dim) N; with every element it is ``internal_force``.
+        Precomputed (a sparse stiffness, or the sliced kernel data): no allocation per call
+        beyond the result."""
+        e = np.asarray(elements, int)
+        if self.formulation == "linear":
+            ed, ke = self._edofs[e], self.ke[e]
+            r, c = np.repeat(ed, ed.shape[1], axis=1).ravel(), np.tile(ed, (1, ed.shape[1])).ravel()
+            K = sp.csr_matrix((ke.ravel(), (r, c)), shape=(self.ndof, self.ndof))
+            return lambda u: (K @ u.ravel()).reshape(u.shape)
+        voigt = VOIGT_2D if self.dim == 2 else VOIGT_3D
+        conn = np.ascontiguousarray(self._conn[e])
+        rules = [(np.ascontiguousarray(q.dN[e]), np.ascontiguousarray(q.dx[e]), np.ascontiguousarray(D[e]))
+                 for q, D in zip(self.rules, self._D_rules)]
+        hg = self.hg if self.hg is not None and self.hg.form == "stiffness" else None
+        gamma, k = (hg.gamma[e], hg.k[e]) if hg else (None, None)
+
+        def force(u: np.ndarray) -> np.ndarray:
+            f = np.zeros_like(u, dtype=float)
+            uc = np.ascontiguousarray(u, dtype=float)
+            for dN, dx, D in rules:
+                total_lagrangian_force(uc, conn, dN, dx, D, voigt, f)
+            if hg is not None:
+                q = np.einsum("ema,eai->emi", gamma, u[conn])
+                fe = np.einsum("e,ema,emi->eai", k, gamma, q)
+                np.add.at(f, conn, fe)
+            return f
+        return force
+
     def _scatter(self, fe: np.ndarray, shape) -> np.ndarray:
         """Element vectors (nel, n_loc, dim) -> assembled nodal array."""
         return np.bincount(self._edofs.ravel(), np.reshape(fe, -1), minlength=self.ndof).reshape(shape)

@@ -67,10 +67,10 @@ def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, st
         tie = PenaltyTie(itf, backend, scene.mass, p["interface.tie_penalty"] or 4 * float(scene.kn.max()))
     dt_fem, dt_dem = fem.critical_dt(), min(backend.critical_dt(), tie.critical_dt(fem.m),
                                             models_critical_dt(models, scene))
-    # 0 = automatic: as many substeps as the FEM step allows with the kinematic tie; one with
-    # the penalty tie, whose stiff spring mode makes impulse time stepping resonate when the
-    # FEM step is near a multiple of its period (measured: unstable at m = 4, k = 2e8 N/m)
-    auto = max(1, int(np.floor(dt_fem / dt_dem))) if p["interface.tie"] == "kinematic" else 1
+    # 0 = automatic: as many substeps as the FEM step allows (with the interface band's
+    # elements among the fast forces the impulse scheme does not resonate: coupling/coupled.py;
+    # the penalty tie resonated at m = 4, k = 2e8 N/m before the band, tests/test_coupled.py)
+    auto = max(1, int(np.floor(dt_fem / dt_dem)))
     m = p["clock.substeps"] or auto
     n, dt = n_steps(p, t_end_default, time_step(p, min(dt_fem, m * dt_dem)))
     if steps:
