@@ -83,6 +83,12 @@ def corrupt(run_dir: Path) -> str | None:
     return None
 
 
+def step_of(ck_dir: Path) -> int:
+    """The clock step a checkpoint was taken at (without reading its state)."""
+    with h5py.File(Path(ck_dir) / "state.h5", "r") as h5:
+        return int(h5["loop"]["step"][()])
+
+
 def read(ck_dir: Path) -> dict:
     with h5py.File(Path(ck_dir) / "state.h5", "r") as h5:
         return _read(h5)

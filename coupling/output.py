@@ -6,6 +6,7 @@ half-written result where a finished one is expected.
 """
 from __future__ import annotations
 
+import fcntl
 import json
 import os
 import shutil
@@ -21,6 +22,7 @@ from .simulation import FieldFrame
 # engines' scratch files (data file, log) inside the run directory, so a killed run leaves
 # nothing in /tmp (dem_region.backends.base.scratch_dir reads FEMDEM_SCRATCH_DIR)
 SCRATCH = "engine-scratch"
+FRAMES = "frames"  # field frames stored one file each until the run finishes
 
 
 @contextmanager
@@ -34,15 +36,23 @@ def _cwd(path: Path):
         os.chdir(old)
 
 
+class RunInProgress(FileExistsError):
+    """Another living process holds this run directory."""
+
+
 class RunOutput:
     """Writer for one run directory: fields over time, then history, summary and plots.
 
     The ``.partial`` directory is created with one mkdir, which fails when another run holds
     it, so two runs never share or delete each other's directories. With ``unique`` (the
-    default --out) a clash adds ``-2``, ``-3``, ... to the name instead of failing.
+    default --out) a clash adds ``-2``, ``-3``, ... to the name instead of failing. The run
+    holds a lock on ``run.lock`` while it lives (the kernel drops it when the process dies,
+    however it dies), so a resume never takes over a run that is still going.
+    ``resume``: continue a stopped run's directory (from its checkpoint, or with ``restart``
+    from the beginning when it stopped before its first checkpoint).
     """
 
-    def __init__(self, final_dir: Path, resume: bool = False, unique: bool = False):
+    def __init__(self, final_dir: Path, resume: bool = False, unique: bool = False, restart: bool = False):
         final = Path(final_dir).absolute()  # a worker process writes here from its own cwd
         for n in range(2, 10_000):
             self.final, self.dir = final, final.with_name(final.name + ".partial")
@@ -63,23 +73,73 @@ class RunOutput:
                 if not unique:
                     raise FileExistsError(str(self.dir)) from None
                 final = Path(f"{final_dir}-{n}").absolute()
+        self._lock = open(self.dir / "run.lock", "a")
+        try:
+            fcntl.flock(self._lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            self._lock.close()
+            raise RunInProgress(str(self.dir)) from None
+        if restart:  # nothing of the stopped attempt is kept but its run.json
+            for child in self.dir.iterdir():
+                if child.name not in ("run.lock", "run.json"):
+                    shutil.rmtree(child) if child.is_dir() else child.unlink()
         (self.dir / "plots").mkdir(exist_ok=True)
-        self._xdmf = None
+        self._frames = 0
+
+    def keep_frames_until(self, t_end: float) -> None:
+        """Resuming: drop the stopped attempt's frames after t_end (s), the checkpoint's time;
+        the run writes them again (and the XDMF of an attempt that ended with an error)."""
+        for name in ("fields.xdmf", "fields.h5"):
+            (self.dir / name).unlink(missing_ok=True)
+        for f in sorted((self.dir / FRAMES).glob("frame-*.h5")):
+            with h5py.File(f, "r") as h5:
+                late = float(h5.attrs["time"]) > t_end * (1 + 1e-12)
+            if late:
+                f.unlink()
+        self._frames = len(list((self.dir / FRAMES).glob("frame-*.h5")))
 
     def frame(self, t: float, f: FieldFrame) -> None:
-        """Append one XDMF frame (the mesh is written with the first frame)."""
-        with _cwd(self.dir):
-            if self._xdmf is None:
-                self._xdmf = meshio.xdmf.TimeSeriesWriter("fields.xdmf").__enter__()
-                self._xdmf.write_points_cells(f.points, f.cells)
-            self._xdmf.write_data(t, point_data=f.point_data, cell_data=f.cell_data)
+        """Store one field frame: its own small HDF5 file, published by a rename, so a kill
+        keeps every frame written before it (the XDMF is assembled by ``finish``)."""
+        d = self.dir / FRAMES
+        d.mkdir(exist_ok=True)
+        if not (d / "mesh.h5").exists():
+            _write_atomic(d / "mesh.h5", lambda h5: (h5.create_dataset("points", data=f.points),
+                                                     [h5.create_dataset(f"cells/{k}", data=v) for k, v in f.cells.items()]))
+
+        def fill(h5):
+            h5.attrs["time"] = t
+            for k, v in f.point_data.items():
+                h5.create_dataset(f"point_data/{k}", data=v)
+            for k, blocks in (f.cell_data or {}).items():
+                for n, v in enumerate(blocks):
+                    h5.create_dataset(f"cell_data/{k}/{n:03d}", data=v)
+        _write_atomic(d / f"frame-{self._frames:06d}.h5", fill)
+        self._frames += 1
+
+    def _write_xdmf(self, keep_frames: bool) -> None:
+        """fields.xdmf + fields.h5 (ParaView) from the stored frames, in time order; the
+        frames stay with a run that may be resumed."""
+        d = self.dir / FRAMES
+        files = sorted(d.glob("frame-*.h5"))
+        if not files:
+            return
+        with h5py.File(d / "mesh.h5", "r") as h5:
+            points, cells = h5["points"][:], {k: v[:] for k, v in h5["cells"].items()}
+        with _cwd(self.dir), meshio.xdmf.TimeSeriesWriter("fields.xdmf") as w:
+            w.write_points_cells(points, cells)
+            for f in files:
+                with h5py.File(f, "r") as h5:
+                    pd = {k: v[:] for k, v in h5.get("point_data", {}).items()}
+                    cd = {k: [g[n][:] for n in sorted(g)] for k, g in h5.get("cell_data", {}).items()}
+                    w.write_data(float(h5.attrs["time"]), point_data=pd, cell_data=cd or None)
+        if not keep_frames:
+            shutil.rmtree(d)
 
     def finish(self, summary: dict, history: dict[str, np.ndarray], keep_checkpoint: bool = False) -> Path:
         """Write history.h5 and summary.json, close the fields, publish the directory; the
         last checkpoint stays with a run that did not finish well (to restart it)."""
-        if self._xdmf is not None:
-            with _cwd(self.dir):
-                self._xdmf.__exit__()
+        self._write_xdmf(keep_frames=keep_checkpoint)
         with h5py.File(self.dir / "history.h5", "w") as h5:
             g = h5.create_group("history")
             for k, v in history.items():
@@ -91,10 +151,19 @@ class RunOutput:
         for name in ("checkpoint.old", "checkpoint.tmp") + (() if keep_checkpoint else ("checkpoint",)):
             shutil.rmtree(self.dir / name, ignore_errors=True)
         shutil.rmtree(self.dir / SCRATCH, ignore_errors=True)
+        (self.dir / "run.lock").unlink(missing_ok=True)
         if self.final.exists():
             self.final.rmdir()  # empty (checked in __init__); fails rather than merge into another run's
         os.replace(self.dir, self.final)
+        self._lock.close()
         return self.final
+
+
+def _write_atomic(path: Path, fill) -> None:
+    tmp = path.with_suffix(".tmp")
+    with h5py.File(tmp, "w") as h5:
+        fill(h5)
+    os.replace(tmp, path)
 
 
 def _jsonable(x):

@@ -11,9 +11,7 @@ from pathlib import Path
 
 from . import checkpoint
 from .case import Case
-from .output import SCRATCH, RunOutput
-from fem_region.mesh import TooLarge
-
+from .output import SCRATCH, RunInProgress, RunOutput
 from .params import CaseError
 from .simulation import Instability, run_clock
 
@@ -25,13 +23,15 @@ def default_out(case: Case, mode: str, dem: str) -> Path:
 
 
 def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool,
-            resume_from: Path | None = None) -> tuple[int, Path, dict]:
-    """Run one case (or continue it from the checkpoint ``resume_from``); returns (exit code,
-    run directory, summary)."""
+            resume_from: Path | None = None, restart: bool = False) -> tuple[int, Path, dict]:
+    """Run one case (or continue it from the checkpoint ``resume_from``, or with ``restart``
+    run a stopped run again from the start in its own directory); returns (exit code, run
+    directory, summary)."""
     scene = case.scene
     if mode not in scene.MODES:
         raise CaseError(f"--mode {mode}: case {case.name} supports {', '.join(scene.MODES)}")
-    writer = open_output(out or default_out(case, mode, dem), resume_from is not None, unique=not out)
+    writer = open_output(out or default_out(case, mode, dem), resume_from is not None or restart, unique=not out,
+                         restart=restart)
     checkpoint.write_run_info(writer.dir, {"case": case.name, "case_file": str(case.path), "mode": mode, "dem": dem,
                                            "parameters": case.parameters})
     t_start = time.perf_counter()
@@ -40,6 +40,12 @@ def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool,
     status, message = "ok", ""
     try:
         sim = scene.build(case.parameters, mode, dem)
+        if case.parameters["output.checkpoint_every"] and sim.checkpoint is None:
+            raise CaseError(f"output.checkpoint_every = {case.parameters['output.checkpoint_every']}: this run cannot "
+                            f"checkpoint ({_why_no_checkpoint(sim, dem)}); allowed: 0 (a killed run then resumes "
+                            "from its start)")
+        if resume_from is not None:
+            writer.keep_frames_until(checkpoint.step_of(resume_from) * sim.dt)
         limit = case.parameters["clock.max_steps"]
         if sim.n_steps > limit:
             raise CaseError(f"clock.max_steps = {limit}: this run needs {sim.n_steps:,} clock steps "
@@ -60,12 +66,14 @@ def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool,
             t0 = time.perf_counter()
             scene.plot(case.parameters, result["history"], qoi, writer.dir / "plots")
             result["timing_s"]["io"] += time.perf_counter() - t0
-    except (TooLarge, MemoryError) as exc:  # a model this machine cannot hold is bad input
+    except MemoryError as exc:  # a model this machine cannot hold is bad input (the meshes' and
+        # lattices' own estimates say so before building; numpy's says how much it wanted)
         if resume_from is None:
             writer_cleanup(writer)
-        raise CaseError(str(exc) if isinstance(exc, TooLarge) else
-                        "the model does not fit in memory (numpy could not allocate it); allowed: coarser "
-                        "particle spacing or mesh, or a smaller zone") from None
+        if type(exc).__name__ == "TooLarge":
+            raise CaseError(str(exc)) from None
+        raise CaseError(f"the model does not fit in memory ({exc}); allowed: a coarser particle spacing or "
+                        "mesh, or a smaller zone") from None
     except CaseError:
         if resume_from is None:  # never delete the checkpoint a resume came for
             writer_cleanup(writer)
@@ -94,11 +102,20 @@ def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool,
     return {"ok": 0, "unstable": 3, "error": 1}[status], final, summary
 
 
-def open_output(out: Path, resume: bool, unique: bool) -> RunOutput:
+def _why_no_checkpoint(sim, dem: str) -> str:
+    if sim.stages and sim.stages[0].name == "virtual test":
+        return "a virtual test runs as one stage"
+    return f"--dem {dem} saves no Hertz contact history"
+
+
+def open_output(out: Path, resume: bool, unique: bool, restart: bool = False) -> RunOutput:
     """The run's writer, or a one-line CaseError for a --out that cannot hold a run."""
     out = Path(out)
     try:
-        return RunOutput(out, resume=resume, unique=unique)
+        return RunOutput(out, resume=resume, unique=unique, restart=restart)
+    except RunInProgress as exc:
+        raise CaseError(f"--out {out}: {exc} belongs to a run that is still going (its process holds "
+                        "run.lock); allowed: wait for it, or another directory") from None
     except FileExistsError as exc:
         if str(exc).endswith(".partial"):
             raise CaseError(f"--out {out}: {exc} exists (a run in progress, or stopped: continue it with "
@@ -198,9 +215,8 @@ def resume(run_dir: Path, quiet: bool) -> tuple[int, Path, dict]:
     if ck_dir is None and partial.is_dir() and checkpoint.corrupt(partial):
         raise CaseError(f"{where}: the checkpoint {checkpoint.corrupt(partial)} is corrupt (cannot be read); "
                         "allowed: a run directory with a complete checkpoint")
-    if not info_path.is_file() or ck_dir is None:
-        raise CaseError(f"{where}: no checkpoint there; allowed: a run directory with checkpoint/ "
-                        "(runs write one every output.checkpoint_every steps)")
+    if not info_path.is_file():
+        raise CaseError(f"{where}: no run.json there; allowed: the directory of a stopped run")
     info = _read_json(info_path, where)
     need = {"case_file": str, "mode": str, "dem": str, "parameters": dict}
     bad = [k for k, t in need.items() if not isinstance(info, dict) or not isinstance(info.get(k), t)]
@@ -208,7 +224,9 @@ def resume(run_dir: Path, quiet: bool) -> tuple[int, Path, dict]:
         raise CaseError(f"{where}: run.json is corrupt ({bad[0]} missing or of the wrong type); "
                         "allowed: the run.json the run wrote")
     case = load_case(info["case_file"], info["parameters"])
-    return execute(case, info["mode"], info["dem"], final, quiet, resume_from=ck_dir)
+    # stopped before its first checkpoint (or a procedure that has none): run it again from
+    # the start, in its own directory; the result is the uninterrupted run's
+    return execute(case, info["mode"], info["dem"], final, quiet, resume_from=ck_dir, restart=ck_dir is None)
 
 
 def _read_json(path: Path, where: str):

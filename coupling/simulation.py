@@ -169,7 +169,7 @@ def run_clock(sim: Simulation, on_sample: Callable[[int, float], None] | None = 
     try:
         if resume_from is None:
             sample(0)
-        if frame_every and on_frame:
+        if frame_every and on_frame and resume_from is None:  # a resume keeps the frames before its checkpoint
             frame(step)
         for step in range(first, sim.n_steps + 1):
             for stage in sim.stages:

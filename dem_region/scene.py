@@ -10,7 +10,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from fem_region.mesh import TooLarge, check_fits as fits  # noqa: F401 (TooLarge: re-exported)
 
 
 # Peak memory per particle of a bonded lattice in a run (the orchestrator's arrays, the law
@@ -18,9 +17,27 @@ from fem_region.mesh import TooLarge, check_fits as fits  # noqa: F401 (TooLarge
 BYTES_PER_PARTICLE = 4096
 
 
+class TooLarge(MemoryError):
+    """A model that cannot fit in this machine's memory (bad input: the message has the count
+    and the estimate)."""
+
+
 def check_fits(n: float, what: str) -> None:
-    """Refuse ``n`` particles before any array of them exists (fem_region.mesh.check_fits)."""
-    fits(n, BYTES_PER_PARTICLE, "particles", what)
+    """Refuse ``n`` particles before any array of them exists, when BYTES_PER_PARTICLE x n
+    exceeds the memory available now (MemAvailable of /proc/meminfo; the same rule as
+    fem_region.mesh.check_fits, which this package may not import)."""
+    need, avail = float(n) * BYTES_PER_PARTICLE, _available()
+    if avail is not None and need > avail:
+        raise TooLarge(f"{what}: {n:.3g} particles need about {need / 2**30:.3g} GiB, {avail / 2**30:.3g} GiB "
+                       "available; allowed: a coarser particle spacing or a smaller zone")
+
+
+def _available() -> float | None:
+    try:
+        with open("/proc/meminfo") as f:
+            return next(float(line.split()[1]) * 1024 for line in f if line.startswith("MemAvailable:"))
+    except (OSError, StopIteration):
+        return None
 
 
 @dataclass

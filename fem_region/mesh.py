@@ -17,7 +17,7 @@ from .elements import ELEMENTS
 BYTES_PER_NODE = 2048
 
 
-class TooLarge(ValueError):
+class TooLarge(MemoryError):
     """A model that cannot fit in this machine's memory (bad input: the message has the count
     and the estimate)."""
 

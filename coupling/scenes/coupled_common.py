@@ -107,7 +107,8 @@ def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, st
         close=backend.finalize, versions={dem: backend.version}, timing_correction=clock.timing_correction,
         instability_hint=_hint(p, tie, m, dt, dt_dem),
         guards=fem_guards(fem) + [particles_escaped(backend, scene)],
-        checkpoint=lambda: (clock.checkpoint_state(), lambda d: backend.checkpoint(d / backend.restart_file)),
+        checkpoint=(lambda: (clock.checkpoint_state(), lambda d: backend.checkpoint(d / backend.restart_file)))
+        if backend.supports_checkpoint else None,
         restore=lambda state, d: clock.restore_state(state, d / backend.restart_file))
     return sim, clock
 

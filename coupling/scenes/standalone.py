@@ -48,6 +48,7 @@ def dem_only(p: dict, scene: DemScene, dem: str, t_end_default: float,
     models: coupling-layer models on the engine's particles (LawBonds, ParticleImpactor);
     drive_dofs: the translations the drive prescribes (the others stay free)."""
     in_models = [0.0]  # s in the coupling layer's models (inside the engine's hook)
+    steps = [0]  # hook calls so far (the models' first call has no step behind it)
     try:
         backend = make_backend(dem, p["dem.process"], p["dem.ranks"])
     except EngineUnavailable as exc:
@@ -63,7 +64,7 @@ def dem_only(p: dict, scene: DemScene, dem: str, t_end_default: float,
         hook = driver.between if driver else None
         if models:
             from ..coupled import ModelStep
-            steps, view, order = [0], ModelStep(backend, list(models)), list(models)
+            view, order = ModelStep(backend, list(models)), list(models)
 
             def hook(drive_between=hook):
                 t0 = time.perf_counter()
@@ -104,6 +105,26 @@ def dem_only(p: dict, scene: DemScene, dem: str, t_end_default: float,
         clock_info={"dt_fem": 0.0, "dt_dem": dt, "dt_stable_dem": dt_stable, "substeps": 1},
         fields=fields, field_frames=p["output.field_frames"], energy_growth_tol=p["guards.energy_growth"],
         close=backend.finalize, versions={dem: backend.version},
+        checkpoint=(lambda: (_state(driver, models, steps), lambda d: backend.checkpoint(d / backend.restart_file)))
+        if backend.supports_checkpoint else None,
+        restore=lambda state, d: _restore(state, driver, models, steps, backend, d / backend.restart_file),
         timing_correction=lambda: {"dem": -getattr(backend, "transport_s", 0.0) - in_models[0],
                                    "models": in_models[0], "transport": getattr(backend, "transport_s", 0.0)})
     return sim, backend, driver
+
+
+def _state(driver, models, steps) -> dict:
+    """What a checkpoint of a DEM-only run holds besides the engine's own restart file."""
+    d = {"hook_steps": steps[0], "models": [m.checkpoint_state() for m in models]}
+    if driver:
+        d["driver"] = {"k": driver.k, "work": driver.work}
+    return d
+
+
+def _restore(d: dict, driver, models, steps, backend, engine_file) -> None:
+    steps[0] = int(d["hook_steps"])
+    for m, state in zip(models, d.get("models", [])):
+        m.restore_state(state)
+    if driver:
+        driver.k, driver.work = int(d["driver"]["k"]), float(d["driver"]["work"])
+    backend.restore(engine_file)

@@ -73,6 +73,8 @@ class DemBackend(Protocol):
     def bond_state(self) -> dict:
         """{intact, broken, broken_list}: counts and rows (i, j, t, x, y, z) of broken bonds."""
 
+    supports_checkpoint: bool  # False where the engine's state cannot be saved whole (contact history)
+
     def checkpoint(self, path) -> None:
         """Save the engine state to ``path`` (the engine's own restart format), atomically."""
 

@@ -250,6 +250,11 @@ class RemoteBackend:
     def atoms_per_rank(self) -> list[int]:
         return self._call("call", "atoms_per_rank")[1]
 
+    @property
+    def supports_checkpoint(self) -> bool:
+        """As the engine in the worker (the LAMMPS family saves no Hertz contact history)."""
+        return self.name == "yade" or self.scene.contact != "hertz_mindlin"
+
     def checkpoint(self, path) -> None:
         self._call("call", "checkpoint", str(path))
 

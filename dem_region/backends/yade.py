@@ -268,6 +268,7 @@ class YadeBackend:
 
     # -- checkpoint ----------------------------------------------------------------------------
     restart_file = "dem.yade.bz2"  # YADE picks the format from the name: compressed binary
+    supports_checkpoint = True
 
     def checkpoint(self, path) -> None:
         """Save the whole engine state (YADE's own format), atomically: a kill mid-write

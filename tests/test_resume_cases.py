@@ -1,0 +1,161 @@
+"""Every bundled case survives SIGKILL: killed after its first checkpoint (or, for the
+procedures that have none, while it runs), ``--resume`` finishes it to the uninterrupted
+result, bit for bit: the same history, the same XDMF frames, the same summary numbers. The
+runs start from another working directory with a relative ``--out``, so a worker process
+(the LAMMPS engine, ``dem.process=worker``) writes its restart files where the run lives.
+
+The full-size seed cases are represented by their coarse variants; the cases that take more
+than about 20 s uninterrupted run with ``-m slow``."""
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import h5py
+import meshio
+import numpy as np
+import pytest
+
+from coupling.case import bundled_cases
+
+ROOT = Path(__file__).resolve().parent.parent
+FULL = {"beam_impact", "beam_impact_3d", "cfrp_beam_impact", "cfrp_beam_impact_3d", "panel_buckling", "rod_impact",
+        "dcb", "enf", "mixed_mode"}  # each has a coarse variant below
+SLOW = {"panel_buckling_coarse", "cfrp_beam_impact_3d_coarse", "beam_impact_3d_coarse", "dcb_coarse", "enf_coarse",
+        "mixed_mode_coarse", "rod_impact_coarse", "beam_impact_coarse", "coupled_vibration", "bonded_beam_bending",
+        "ply_fracture", "column_buckling", "cfrp_beam_impact_coarse"}
+CASES = [pytest.param(c, marks=pytest.mark.slow) if c in SLOW else c for c in bundled_cases() if c not in FULL]
+ENV = {**os.environ, "PYTHONPATH": str(ROOT)}
+
+
+def _femdem(cwd, *args, wait=True):
+    cmd = [sys.executable, "-m", "coupling.cli", *args, "--quiet"]
+    if wait:
+        return subprocess.run(cmd, cwd=cwd, env=ENV, capture_output=True, text=True)
+    return subprocess.Popen(cmd, cwd=cwd, env=ENV, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+
+def _results(run: Path) -> dict:
+    out = {}
+    with h5py.File(run / "history.h5") as h:
+        out.update({f"history/{k}": v[:] for k, v in h["history"].items()})
+    if (run / "fields.xdmf").exists():
+        cwd = os.getcwd()
+        os.chdir(run)
+        try:
+            with meshio.xdmf.TimeSeriesReader("fields.xdmf") as r:
+                r.read_points_cells()
+                for k in range(r.num_steps):
+                    t, pd, _ = r.read_data(k)
+                    out[f"frame{k}/time"] = np.array(t)
+                    out.update({f"frame{k}/{n}": v for n, v in pd.items()})
+        finally:
+            os.chdir(cwd)
+    s = json.loads((run / "summary.json").read_text())
+    out.update({f"qoi/{k}": np.array(v, float) for k, v in s["qoi"].items()})
+    out["status"] = np.array(s["status"] == "ok")
+    return out
+
+
+def _kill_when(proc, ready, timeout=600):
+    t0 = time.time()
+    while time.time() - t0 < timeout and proc.poll() is None:
+        if ready():
+            proc.send_signal(signal.SIGKILL)
+            proc.wait()
+            return True
+        time.sleep(0.02)
+    return False
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_killed_case_resumes_to_the_uninterrupted_result(tmp_path, case):
+    here = tmp_path / "elsewhere"  # not the project: relative paths must still work
+    here.mkdir()
+    every = ["--set", "output.checkpoint_every=20"]
+    straight = _femdem(here, "run", case, *every, "--out", "straight")
+    if straight.returncode == 2 and "output.checkpoint_every" in straight.stderr:  # cannot checkpoint
+        every = []
+        straight = _femdem(here, "run", case, "--out", "straight")
+    assert straight.returncode == 0, straight.stderr
+    # killed after its first checkpoint; a case too short to be caught there (or a procedure,
+    # which has none) is killed as soon as it has started, and resumes from the beginning
+    for out, ready in (("killed", lambda d: (d / "checkpoint" / "state.h5").exists()),
+                       ("killed-early", lambda d: (d / "run.json").exists())):
+        proc = _femdem(here, "run", case, *every, "--out", out, wait=False)
+        partial = here / f"{out}.partial"
+        if _kill_when(proc, lambda: ready(partial)):
+            break
+    else:
+        pytest.fail("the run finished before it could be killed, twice")
+    killed = here / out
+    assert not killed.exists()
+    r = _femdem(tmp_path, "run", "--resume", str(partial))  # from yet another directory, absolute
+    assert r.returncode == 0, r.stderr
+    a, b = _results(here / "straight"), _results(killed)
+    assert a.keys() == b.keys()
+    for k in a:
+        assert np.array_equal(a[k], b[k]), k
+    leftovers = {p.name for p in killed.iterdir()} - {"summary.json", "history.h5", "fields.xdmf", "fields.h5",
+                                                                  "plots", "run.json"}
+    assert not leftovers, leftovers  # no checkpoint, lock, scratch or engine files left in a finished run
+
+
+def test_resume_after_the_engine_worker_alone_was_killed(tmp_path):
+    """The engine's worker process dies: the run ends with status error and keeps its last
+    checkpoint; --resume finishes it to the uninterrupted result."""
+    args = ["run", "coupled_vibration", "--set", "dem.process=worker", "--set", "run.steps=20000",
+            "--set", "output.checkpoint_every=2000", "--set", "clock.substeps=2"]
+    assert _femdem(tmp_path, *args, "--out", "straight").returncode == 0
+    proc = _femdem(tmp_path, *args, "--out", "killed", wait=False)
+    partial = tmp_path / "killed.partial"
+
+    def worker_after_checkpoint():
+        if not (partial / "checkpoint" / "state.h5").exists():
+            return False
+        ps = subprocess.run(["pgrep", "-P", str(proc.pid), "-f", "dem_region.worker"], capture_output=True, text=True)
+        for pid in ps.stdout.split():
+            os.kill(int(pid), signal.SIGKILL)
+        return bool(ps.stdout.split())
+
+    t0 = time.time()
+    while proc.poll() is None and time.time() - t0 < 120 and not worker_after_checkpoint():
+        time.sleep(0.02)
+    proc.wait(timeout=120)
+    assert proc.returncode == 1
+    s = json.loads((tmp_path / "killed" / "summary.json").read_text())
+    assert s["status"] == "error" and (tmp_path / "killed" / "checkpoint").exists()
+    r = _femdem(tmp_path, "run", "--resume", "killed")
+    assert r.returncode == 0, r.stderr
+    a, b = _results(tmp_path / "straight"), _results(tmp_path / "killed")
+    for k in a:
+        assert np.array_equal(a[k], b[k]), k
+
+
+def test_a_running_run_cannot_be_resumed_or_shared(tmp_path):
+    """While a run lives, --resume of its directory and a second run into the same --out are
+    refused (exit 2, one line); the running run is untouched and finishes."""
+    args = ["run", "coupled_vibration", "--set", "run.steps=40000"]
+    proc = _femdem(tmp_path, *args, "--out", "r", wait=False)
+    t0 = time.time()
+    while not (tmp_path / "r.partial" / "run.json").exists() and time.time() - t0 < 60:
+        time.sleep(0.05)
+    for other in (["run", "--resume", "r.partial"], [*args, "--out", "r"]):
+        r = _femdem(tmp_path, *other)
+        assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    proc.wait(timeout=300)
+    assert proc.returncode == 0 and (tmp_path / "r" / "summary.json").exists()
+
+
+def test_runs_started_together_get_their_own_directories(tmp_path):
+    """Two runs of the same case started in the same second with the default --out: two
+    directories, two results, the engine in each name."""
+    procs = [_femdem(tmp_path, "run", "coupled_free_flight", "--set", "run.steps=50", wait=False) for _ in range(2)]
+    for p in procs:
+        p.wait(timeout=120)
+        assert p.returncode == 0
+    dirs = sorted((tmp_path / "runs").iterdir())
+    assert len(dirs) == 2 and all("liggghts" in d.name and (d / "summary.json").exists() for d in dirs), dirs
