@@ -9,6 +9,14 @@ from pathlib import Path
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 
+def _writable(d: Path) -> bool:
+    try:
+        d.mkdir(parents=True, exist_ok=True)
+        return os.access(d, os.W_OK | os.X_OK)
+    except OSError:
+        return False
+
+
 def _user_cache() -> Path:
     """A cache directory this user can write: $FEMDEM_CACHE_DIR, else $XDG_CACHE_HOME/femdem or
     ~/.cache/femdem, else (no writable home, e.g. a service account) one in the temporary
@@ -16,12 +24,8 @@ def _user_cache() -> Path:
     given = os.environ.get("FEMDEM_CACHE_DIR")
     home = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "femdem"
     for d in ([Path(given)] if given else []) + [home, Path(tempfile.gettempdir()) / f"femdem-cache-{os.getuid()}"]:
-        try:
-            d.mkdir(parents=True, exist_ok=True)
-            if os.access(d, os.W_OK | os.X_OK):
-                return d
-        except OSError:
-            continue
+        if _writable(d):
+            return d
     raise SystemExit("femdem: no writable cache directory (set FEMDEM_CACHE_DIR to one)")
 
 
@@ -30,5 +34,7 @@ def _user_cache() -> Path:
 # any package imports numba; engine worker processes inherit it.
 CACHE = _user_cache()
 os.environ["FEMDEM_CACHE_DIR"] = str(CACHE)
-os.environ.setdefault("NUMBA_CACHE_DIR", str(CACHE / "numba"))
-os.environ.setdefault("MPLCONFIGDIR", str(CACHE / "matplotlib"))
+for _var, _sub in (("NUMBA_CACHE_DIR", "numba"), ("MPLCONFIGDIR", "matplotlib")):
+    if not _writable(Path(os.environ.get(_var) or CACHE / _sub)):  # e.g. inherited from another user
+        os.environ[_var] = str(CACHE / _sub)
+    os.environ.setdefault(_var, str(CACHE / _sub))

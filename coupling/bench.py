@@ -110,6 +110,9 @@ def bench(case_name: str, sweep: dict[str, list[str]], base: dict, ref_mode: str
         from dem_region.backends import make_backend
         make_backend("yade").finalize() if "yade" in engines else None
     ref, cached = reference(case_name, {**base, **ref_set}, ref_mode, engines[0], out / "reference")
+    unknown = [q for q in qoi or [] if q not in ref["qoi"]]
+    if unknown:  # known only once the reference has run: refused before any sweep point runs
+        raise CaseError(f"--qoi {unknown[0]}: not a quantity of this case; allowed: {', '.join(ref['qoi'])}")
     keys = list(sweep)
     points = []
     for engine, combo in itertools.product(engines, itertools.product(*(sweep[k] for k in keys))):
@@ -169,7 +172,12 @@ def cli(args) -> int:
     sweep_points(args.case, sweep, base, args.reference_mode, ref_set, args.dem, args.mode)
     from .run import study_dir
     out = study_dir(args.out, f"bench-{Path(args.case).stem}")
-    r = bench(args.case, sweep, base, args.reference_mode, ref_set, args.dem, args.mode, out, args.qoi or None)
+    try:
+        r = bench(args.case, sweep, base, args.reference_mode, ref_set, args.dem, args.mode, out, args.qoi or None)
+    except CaseError:  # (a --qoi the reference does not have): no half study left behind
+        import shutil
+        shutil.rmtree(out, ignore_errors=True)
+        raise
     print(f"reference: --mode {r['reference']['mode']} {r['reference']['set'] or ''} "
           f"({'cached' if r['reference']['cached'] else 'run'}, {r['reference']['wall_s']:.2f} s)")
     for p in r["points"]:

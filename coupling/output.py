@@ -54,6 +54,12 @@ class RunOutput:
 
     def __init__(self, final_dir: Path, resume: bool = False, unique: bool = False, restart: bool = False):
         final = Path(final_dir).absolute()  # a worker process writes here from its own cwd
+        self.made: list[Path] = []
+        for parent in final.parents:
+            if parent.exists():
+                if not parent.is_dir():
+                    raise NotADirectoryError(str(parent))
+                break
         for n in range(2, 10_000):
             self.final, self.dir = final, final.with_name(final.name + ".partial")
             if resume:
@@ -66,6 +72,7 @@ class RunOutput:
                     continue
                 raise FileExistsError(str(self.final))
             try:
+                self.made = [d for d in reversed(self.dir.parents) if not d.exists()]  # to remove on bad input
                 self.dir.parent.mkdir(parents=True, exist_ok=True)
                 self.dir.mkdir()
                 break
@@ -85,6 +92,16 @@ class RunOutput:
                     shutil.rmtree(child) if child.is_dir() else child.unlink()
         (self.dir / "plots").mkdir(exist_ok=True)
         self._frames = 0
+
+    def discard(self) -> None:
+        """Bad input found after the directory was made: remove it, and the parents it made."""
+        self._lock.close()
+        shutil.rmtree(self.dir, ignore_errors=True)
+        for d in reversed(self.made):
+            try:
+                d.rmdir()
+            except OSError:
+                break
 
     def keep_frames_until(self, t_end: float) -> None:
         """Resuming: drop the stopped attempt's frames after t_end (s), the checkpoint's time;

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Callable
 
 
 class CaseError(ValueError):
@@ -33,6 +33,7 @@ class Param:
     open_high: bool = False
     choices: tuple[str, ...] | None = None
     plausible: tuple[float, float] | None = None  # SI range outside which a value is a unit slip
+    check: Callable[[Any], Any] | None = None  # a parser that raises ValueError("what is allowed")
 
     def allowed(self) -> str:
         if self.choices is not None:
@@ -59,6 +60,11 @@ class Param:
         if self.kind == "str":
             if not isinstance(value, str) or (self.choices and value not in self.choices):
                 raise bad
+            if self.check is not None:
+                try:
+                    self.check(value)
+                except ValueError as exc:
+                    raise CaseError(f"{key} = {value!r}: {exc}") from None
             return value
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise bad
@@ -109,6 +115,14 @@ def modulus(default: float, doc: str) -> Param:
 
 def density(default: float, doc: str = "density") -> Param:
     return Param(default, doc, "float", "kg/m^3", low=0.0, open_low=True, plausible=DENSITY_SI)
+
+
+PARTICLE_SI = (1e-6, 1.0)  # m: a micron to a metre; outside it the value was not given in metres
+
+
+def particle_radius(default: float, doc: str) -> Param:
+    """A DEM particle radius (m), with the plausible range of this project's particles."""
+    return Param(default, doc, "float", "m", low=0.0, open_low=True, plausible=PARTICLE_SI)
 
 
 def isotropic_material(E: float, rho: float, poisson: float | None = None) -> dict[str, Param]:

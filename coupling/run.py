@@ -48,7 +48,7 @@ def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool,
             writer.keep_frames_until(checkpoint.step_of(resume_from) * sim.dt)
         limit = case.parameters["clock.max_steps"]
         if sim.n_steps > limit:
-            raise CaseError(f"clock.max_steps = {limit}: this run needs {sim.n_steps:,} clock steps "
+            raise CaseError(f"clock.max_steps = {limit}: this run needs {sim.n_steps:.3g} clock steps "
                             f"({sim.n_steps * sim.dt:.4g} s at dt = {sim.dt:.4g} s); allowed: raise clock.max_steps, "
                             "or shorten clock.t_end")
         bar = _progress(sim, quiet)
@@ -164,8 +164,7 @@ def _memory_peak_mb() -> dict[str, float]:
 
 
 def writer_cleanup(writer: RunOutput) -> None:
-    import shutil
-    shutil.rmtree(writer.dir, ignore_errors=True)
+    writer.discard()
 
 
 def _progress(sim, quiet: bool):
@@ -196,7 +195,6 @@ def _versions() -> dict:
 def resume(run_dir: Path, quiet: bool) -> tuple[int, Path, dict]:
     """Continue a run that was stopped (killed, its engine worker killed, or its machine lost)
     from its last checkpoint."""
-    import json
     from .case import load_case
     run_dir = Path(run_dir).absolute()
     final = run_dir.with_name(run_dir.name[: -len(".partial")]) if run_dir.name.endswith(".partial") else run_dir

@@ -93,18 +93,25 @@ def reduce(C: np.ndarray, dim: int, hypothesis: str) -> np.ndarray:
 
 
 def parse_layup(text: str) -> list[float]:
-    """'[0_6/90_4/0_6]' or '[0/90]s' or '[45/-45]2s' -> one fibre angle (deg) per ply, bottom up."""
+    """'[0_6/90_4/0_6]' or '[0/90]s' or '[45/-45]2s' -> one fibre angle (deg) per ply, bottom up.
+    Counts and repeats are whole numbers >= 1; angles are finite degrees in [-180, 180]."""
     m = re.fullmatch(r"\s*\[([^\]]+)\]\s*(\d*)\s*(s?)\s*", text)
     if not m:
-        raise ValueError(f"layup {text!r}: expected e.g. '[0_6/90_4/0_6]' or '[0/90]s'")
+        raise ValueError("expected e.g. '[0_6/90_4/0_6]', '[0/90]s' or '[45/-45]2s' (nothing after it)")
     plies: list[float] = []
     for group in m.group(1).split("/"):
-        angle, _, count = group.strip().partition("_")
+        angle, sep, count = group.strip().partition("_")
         try:
-            plies += [float(angle)] * (int(count) if count else 1)
+            a, n = float(angle), int(count) if sep else 1
         except ValueError:
-            raise ValueError(f"layup {text!r}: bad ply group {group!r}") from None
-    plies *= int(m.group(2) or 1)
+            raise ValueError(f"bad ply group {group.strip()!r}; allowed: ANGLE or ANGLE_COUNT, e.g. 90_4") from None
+        if not -180.0 <= a <= 180.0 or n < 1:
+            raise ValueError(f"bad ply group {group.strip()!r}; allowed: an angle in [-180, 180] deg and a count >= 1")
+        plies += [a] * n
+    repeat = int(m.group(2) or 1)
+    if repeat < 1:
+        raise ValueError(f"repeat {repeat}: allowed a whole number >= 1")
+    plies *= repeat
     if m.group(3):
         plies += plies[::-1]
     return plies

@@ -2,6 +2,7 @@
 import glob
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -104,3 +105,29 @@ def test_killed_orchestrator_leaves_no_lammps_rank_behind(tmp_path, sig):
         time.sleep(0.2)
     assert not alive, f"processes outlived the orchestrator: {alive}"
     assert set(glob.glob("/dev/shm/*")) <= shm_before, "shared memory left behind"
+
+
+def _as_nobody(cmd, cwd):
+    return subprocess.run(["setpriv", "--reuid=65534", "--regid=65534", "--clear-groups", "env", "HOME=/nonexistent",
+                           *cmd], cwd=cwd, capture_output=True, text=True)
+
+
+@pytest.mark.skipif(os.geteuid() != 0 or not shutil.which("setpriv"), reason="needs root to become another user")
+def test_an_ordinary_user_without_a_home_runs_cases():
+    """As 'nobody' (no writable home, project files owned by root): a run in a directory of
+    theirs works on the in-process and the worker engines (numba and matplotlib caches go to
+    a per-user temporary directory); one where they cannot write is refused in one line."""
+    import tempfile
+    femdem = str(Path(sys.executable).parent / "femdem")
+    home = Path(tempfile.mkdtemp(prefix="femdem-user-"))
+    try:
+        home.chmod(0o777)
+        for args in (["bar_wave"], ["coupled_vibration", "--set", "run.steps=200"],
+                     ["coupled_vibration", "--dem", "lammps", "--set", "run.steps=200"]):
+            r = _as_nobody([femdem, "run", *args, "--quiet"], home)
+            assert r.returncode == 0, r.stderr
+        assert len(list((home / "runs").iterdir())) == 3
+        r = _as_nobody([femdem, "run", "bar_wave", "--quiet"], ROOT)  # the project is root's
+        assert r.returncode == 2 and "not writable" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    finally:
+        shutil.rmtree(home, ignore_errors=True)

@@ -110,3 +110,131 @@ def test_bad_input_of_the_seed_scenes(femdem, case, args, words):
     assert len(err.strip().splitlines()) == 1, err
     for w in words:
         assert w in err, (w, err)
+
+
+# -- the catalogue of foreseeable bad input (issue #21): exit 2, one line, nothing written ---------
+
+GOOD = '[case]\nscene = "bar_wave"\n'
+CASE_FILES = {  # name: (bytes of the case file, words the one line must hold)
+    "latin-1 text": (("# d\xe9j\xe0 vu\n" + GOOD).encode("latin-1"), ["not UTF-8", "0xe9"]),
+    "empty": (b"", ["case.scene missing"]),
+    "case not a table": (b"case = 5\n", ["case.scene missing"]),
+    "scene a number": (b"[case]\nscene = 3\n", ["case.scene = 3", "bar_wave"]),
+    "scene a list": (b"[case]\nscene = ['bar_wave']\n", ["case.scene"]),
+    "name a list": (GOOD.encode() + b"name = [1]\n", ["case.name = [1]", "string"]),
+    "description a table": (GOOD.encode() + b"description = {a = 1}\n", ["case.description", "string"]),
+    "name a path": (GOOD.encode() + b"name = '../../etc'\n", ["case.name", "../../etc", "letters"]),
+    "name absolute": (GOOD.encode() + b"name = '/tmp/x'\n", ["case.name", "/tmp/x"]),
+    "unknown [case] key": (GOOD.encode() + b"mode = 'fem'\n", ["case.mode", "unknown"]),
+    "array for a number": (GOOD.encode() + b"[clock]\nsafety = [0.5]\n", ["clock.safety", "[0.5]"]),
+    "table for a number": (GOOD.encode() + b"[clock.safety]\nx = 1\n", ["clock.safety.x", "unknown"]),
+    "bool for a number": (GOOD.encode() + b"[clock]\nsafety = true\n", ["clock.safety = True", "number"]),
+    "string for an int": (GOOD.encode() + b"[output]\nfield_frames = 'ten'\n", ["output.field_frames", "ten", "integer"]),
+    "nan": (GOOD.encode() + b"[clock]\nsafety = nan\n", ["clock.safety = nan"]),
+    "inf": (GOOD.encode() + b"[clock]\nt_end = inf\n", ["clock.t_end = inf"]),
+    "huge int": (GOOD.encode() + b"[output]\nfield_frames = 99999999999999999999\n", ["output.field_frames", "<= 10000"]),
+    "fraction for an int": (GOOD.encode() + b"[output]\nfield_frames = 2.5\n", ["output.field_frames = 2.5"]),
+    "a date": (GOOD.encode() + b"[clock]\nt_end = 1979-05-27\n", ["clock.t_end", "number"]),
+    "duplicated key": (GOOD.encode() + b"[clock]\nsafety = 0.5\nsafety = 0.6\n", ["not valid TOML"]),
+    "kinematic tie with a penalty": (b'[case]\nscene = "chain_consistency"\n[interface]\ntie_penalty = 1e8\n',
+                                     ["interface.tie_penalty", "no effect", "kinematic"]),
+}
+
+
+@pytest.mark.parametrize("name", CASE_FILES)
+def test_bad_case_file_catalogue(femdem, tmp_path, name):
+    body, words = CASE_FILES[name]
+    path = tmp_path / "bad.toml"
+    path.write_bytes(body)
+    code, summary, err = femdem("run", str(path))
+    assert code == 2 and summary is None, err
+    assert len(err.strip().splitlines()) == 1, err
+    for w in words:
+        assert w in err, (w, err)
+    assert not list(tmp_path.glob("run*")), "nothing may be left behind on bad input"
+
+
+@pytest.mark.parametrize("encoding", ["utf-8-sig", "utf-16", "utf-32"])
+def test_case_files_with_a_byte_order_mark_are_read(femdem, tmp_path, encoding):
+    """UTF-8 with a BOM (Windows editors) and UTF-16 / UTF-32, which always carry one, are
+    unambiguous: read as their text; the run matches the plain UTF-8 file's."""
+    path = tmp_path / "c.toml"
+    path.write_bytes((GOOD + "[mesh]\nelements_along = 40\n").encode(encoding))
+    code, s, err = femdem("run", str(path))
+    assert code == 0, err
+    assert s["parameters"]["mesh.elements_along"] == 40
+
+
+@pytest.mark.parametrize("args, words", [
+    (["run", "{tmp}"], ["is a directory"]),
+    (["run", "{tmp}/missing.toml"], ["no such case file"]),
+    (["run", "bar_wave", "--set", "=3"], ["key=value"]),
+    (["run", "bar_wave", "--set", "clock.safety="], ["key=value"]),
+    (["run", "bar_wave", "--set", "clock.safety=0.5", "--set", "clock.safety=0.6"], ["clock.safety", "twice"]),
+    (["run", "bar_wave", "--set", "clock.safety=1e400"], ["clock.safety", "1e400"]),
+    (["run", "bar_wave", "--set", "output.field_frames=0x10"], ["output.field_frames", "0x10"]),
+    (["run", "bar_wave", "--set", "clock.t_end=1e300"], ["clock.max_steps", "clock steps"]),
+    (["run", "bar_wave", "--set", "clock.max_steps=10"], ["clock.max_steps = 10", "clock steps"]),
+    (["run", "bar_wave", "--out", "{tmp}/afile"], ["--out", "afile", "not an empty directory"]),
+    (["run", "bar_wave", "--out", "{tmp}/afile/sub"], ["--out", "a file"]),
+    (["run", "bar_wave", "--dem", "yade"], ["--dem yade", "--mode fem"]),
+    (["run", "bar_wave", "--mode", "dem"], ["--mode dem", "fem"]),
+    (["run", "bar_wave", "--resume", "{tmp}"], ["--resume", "CASE", "ignored"]),
+    (["run", "--resume", "{tmp}", "--set", "a=1"], ["--resume", "--set", "ignored"]),
+    (["run", "--resume", "{tmp}", "--dem", "yade"], ["--resume", "--dem", "ignored"]),
+    (["run", "--resume", "{tmp}/afile"], ["--resume", "run.json"]),
+    (["run", "chain_consistency", "--mode", "dem", "--set", "interface.tie=penalty"], ["interface.tie", "no effect"]),
+    (["run", "chain_consistency", "--mode", "fem", "--set", "dem.process=worker"], ["dem.process", "no effect"]),
+    (["run", "chain_consistency", "--set", "dem.ranks=2", "--dem", "yade"], ["dem.ranks = 2", "lammps"]),
+    (["run", "chain_consistency", "--set", "particle.radius=1e-12"], ["particle.radius", "implausible"]),
+    (["run", "chain_consistency", "--set", "chain.particles=1000000000"], ["chain.particles", "<= 100000"]),
+    (["run", "beam_impact_coarse", "--set", "laminate.layup=[0/90]0s"], ["laminate.layup", "repeat 0"]),
+    (["run", "beam_impact_coarse", "--set", "laminate.layup=[0_0/90]"], ["laminate.layup", "count >= 1"]),
+    (["run", "beam_impact_coarse", "--set", "laminate.layup=[0/90]s x"], ["laminate.layup", "nothing after"]),
+    (["run", "beam_impact_coarse", "--set", "laminate.layup=[0//90]"], ["laminate.layup", "ply group"]),
+    (["compare", "chain_consistency", "--dem", "yade,yade"], ["--dem yade,yade", "different"]),
+    (["compare", "chain_consistency", "--dem", "yade"], ["--dem yade", "two or more"]),
+    (["compare", "bar_wave", "--dem", "yade,liggghts"], ["--mode fem"]),
+    (["bench", "chain_consistency", "--sweep", "clock.substeps=1,2,-1"], ["clock.substeps", "-1"]),
+    (["bench", "chain_consistency", "--sweep", "clock.substeps=1,,2"], ["--sweep", "empty"]),
+    (["bench", "chain_consistency", "--sweep", "clock.substeps=1", "--sweep", "clock.substeps=2"], ["twice"]),
+    (["bench", "chain_consistency", "--reference-mode", "xyz"], ["--reference-mode xyz"]),
+    (["bench", "chain_consistency", "--dem", "yade,yade"], ["--dem yade,yade"]),
+])
+def test_bad_command_line_catalogue(tmp_path, monkeypatch, capsys, args, words):
+    """Each refused in one line before anything runs; bench and compare check every point of
+    their sweep first (a bad last value costs nothing). Run from tmp_path: the default run
+    directories would land in runs/ there."""
+    from coupling.cli import main
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "afile").write_text("x")
+    args = [a.replace("{tmp}", str(tmp_path)) for a in args]
+    code = main(args + (["--quiet"] if args[0] == "run" else []))
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert len(err.strip().splitlines()) == 1, err
+    for w in words:
+        assert w in err, (w, err)
+    assert not (tmp_path / "runs").exists()
+
+
+def test_a_model_too_large_for_the_memory_is_refused_with_its_estimate(femdem):
+    """Lattices and meshes are sized before any array of them exists: a zone of 1e12
+    particles is refused with its estimate, in one line (exit 2)."""
+    code, summary, err = femdem("run", "dcb_coarse", "--set", "particle.radius=1e-6")
+    assert code == 2 and summary is None, err
+    assert len(err.strip().splitlines()) == 1 and "GiB" in err and "allowed" in err
+
+
+def test_an_unforeseen_error_is_one_line_and_a_log(monkeypatch, capsys):
+    """A defect prints one line with a pointer to its traceback, exit code 1."""
+    from coupling import cli
+
+    def boom(args):
+        raise ZeroDivisionError("a defect")
+    monkeypatch.setattr(cli, "_cases", lambda: boom(None))
+    assert cli.main(["cases"]) == 1
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "ZeroDivisionError: a defect" in err and "traceback in" in err
+    log = err.split("traceback in ")[1].rstrip(")")
+    assert "ZeroDivisionError" in open(log).read()

@@ -64,7 +64,9 @@ PARAMETERS = {
     "interface.Z0": positive(40e6, "interlaminar normal strength (Table 1)", "Pa"),
     "interface.R0": positive(20e6, "interlaminar shear strength (Table 1)", "Pa"),
     "interface.friction": Param(0.3, "Coulomb friction of delaminated faces", low=0.0, high=2.0),
-    "laminate.layup": Param("[0_6/90_4/0_6]", "layup, bottom up", kind="str"),
+    "laminate.layup": Param("[0_6/90_4/0_6]", "layup, bottom up: [ANGLE_COUNT/...] with an optional repeat "
+                            "and s (symmetric), e.g. [0_6/90_4/0_6] or [0/90_2]2s; 0 and 90 plies", kind="str",
+                            check=materials.parse_layup),
     "laminate.ply_thickness": positive(0.15e-3, "ply thickness", "m"),
     "geometry.half_span": positive(25e-3, "clamp to centre line", "m"),
     "geometry.width": positive(25e-3, "beam width (out of plane), for forces of the whole beam", "m"),

@@ -24,12 +24,12 @@ from dem_region.backends import check_available, make_backend
 from dem_region.scene import DemScene
 
 from ..checks import check
-from ..params import Param, isotropic_material, positive
+from ..params import isotropic_material, Param, particle_radius, positive
 from ..simulation import Simulation, Stage
 
 COMMON = {
     **isotropic_material(10e9, 2000.0),
-    "particle.radius": positive(0.0005, "sphere radius", "m"),
+    "particle.radius": particle_radius(0.0005, "sphere radius"),
     "packing.kind": Param("square", "regular layer", kind="str", choices=("square", "hexagonal")),
     "geometry.columns": Param(40, "particles along the block", kind="int", low=4),
     "geometry.rows": Param(10, "particles across the block", kind="int", low=3),

@@ -17,7 +17,7 @@ from fem_region import mesh
 from fem_region.explicit import ExplicitDynamics, PrescribedMotion
 
 from ..checks import bound
-from ..params import Param, isotropic_material, positive
+from ..params import isotropic_material, Param, particle_radius, positive
 from .common import fem_only, make_region
 from .coupled_common import COUPLING, coupled_simulation
 from .standalone import dem_only
@@ -27,9 +27,9 @@ DESCRIPTION = "coupled: FEM bar + DEM chain vs the monolithic chain, to round-of
 MODES = ("coupled", "fem", "dem")
 PARAMETERS = {
     **isotropic_material(1e9, 1000.0),
-    "particle.radius": positive(0.005, "sphere radius = half the FEM element length", "m"),
-    "chain.fem_elements": Param(20, "FEM elements along the left part", kind="int", low=1),
-    "chain.particles": Param(20, "free DEM particles in the right part", kind="int", low=1),
+    "particle.radius": particle_radius(0.005, "sphere radius = half the FEM element length"),
+    "chain.fem_elements": Param(20, "FEM elements along the left part", kind="int", low=1, high=100_000),
+    "chain.particles": Param(20, "free DEM particles in the right part", kind="int", low=1, high=100_000),
     "chain.stiffness_ratio": Param(1.0, "DEM bond stiffness / FEM element stiffness (a hard case at 1000)",
                                    low=1e-3, high=1e6),
     "load.velocity": positive(1.0, "peak velocity of the pulse at the left end", "m/s"),

@@ -22,14 +22,14 @@ import numpy as np
 from dem_region.scene import DemScene
 
 from ..checks import check
-from ..params import Param, density, modulus, positive
+from ..params import density, modulus, Param, particle_radius, positive
 from .standalone import dem_only
 
 COMMON = {
     "material.E": modulus(48e9, "Young's modulus"),
     "material.poisson": Param(0.20, "Poisson ratio", low=0.0, high=0.49),
     "material.rho": density(2800.0),
-    "particle.radius": positive(0.01, "sphere radius", "m"),
+    "particle.radius": particle_radius(0.01, "sphere radius"),
     "impact.velocity": positive(10.0, "impact speed (each sphere in test 1)", "m/s"),
     "clock.steps_per_contact": Param(400, "time steps per Hertz contact duration", kind="int", low=20),
 }

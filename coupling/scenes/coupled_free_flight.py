@@ -13,7 +13,7 @@ from fem_region import materials, mesh
 from fem_region.explicit import ExplicitDynamics
 
 from ..checks import bound
-from ..params import Param, isotropic_material, positive
+from ..params import isotropic_material, Param, particle_radius, positive
 from .common import make_region
 from .coupled_common import COUPLING, coupled_simulation
 
@@ -25,7 +25,7 @@ PARAMETERS = {
     "geometry.fem_length": positive(0.04, "FEM block length", "m"),
     "geometry.dem_length": positive(0.04, "lattice length", "m"),
     "geometry.height": positive(0.02, "height", "m"),
-    "particle.radius": positive(0.001, "lattice sphere radius", "m"),
+    "particle.radius": particle_radius(0.001, "lattice sphere radius"),
     "mesh.element_size": positive(0.004, "FEM element size", "m"),
     "motion.velocity_x": Param(1.0, "initial drift velocity x", unit="m/s"),
     "motion.velocity_y": Param(0.5, "initial drift velocity y", unit="m/s"),

@@ -16,7 +16,7 @@ from fem_region import materials, mesh
 from fem_region.explicit import ExplicitDynamics, PrescribedMotion
 
 from ..checks import bound
-from ..params import Param, isotropic_material, positive
+from ..params import isotropic_material, Param, particle_radius, positive
 from .common import make_region
 from .coupled_common import COUPLING, coupled_simulation
 
@@ -25,7 +25,7 @@ DESCRIPTION = "coupled: undamped FEM + lattice cantilever, energy drift over 10^
 MODES = ("coupled",)
 PARAMETERS = {
     **isotropic_material(10e9, 2000.0),
-    "particle.radius": positive(0.0005, "lattice sphere radius", "m"),
+    "particle.radius": particle_radius(0.0005, "lattice sphere radius"),
     "geometry.length": positive(0.04, "beam length (half FEM, half lattice)", "m"),
     "geometry.height": positive(0.004, "beam depth", "m"),
     "mesh.spacing_ratio": Param(2, "FEM element size / lattice spacing", kind="int", low=1, high=8),

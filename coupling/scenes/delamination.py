@@ -40,7 +40,7 @@ from dem_region.scene import DemScene
 from fem_region import materials, mesh
 from fem_region.explicit import ExplicitDynamics
 
-from ..params import CaseError, Param, density, modulus, positive
+from ..params import CaseError, density, modulus, Param, particle_radius, positive
 from .common import FEM_OPTIONS, make_region
 
 # AS4/PEEK, the delamination benchmark material of Camanho & Davila (NASA/TM-2002-211737) and
@@ -64,7 +64,7 @@ PARAMETERS: dict[str, Param] = {
                                            "sqrt(9 pi E22 Gc / (32 N d)) are lowered to it (Turon et al. 2007); "
                                            "0 keeps the given strengths", low=0.0, high=50.0),
     "interface.friction": Param(0.0, "Coulomb friction of debonded faces in contact", low=0.0, high=2.0),
-    "particle.radius": positive(0.13e-3, "DEM particle radius r (spacing d = 2r)", "m"),
+    "particle.radius": particle_radius(0.13e-3, "DEM particle radius r (spacing d = 2r)"),
     "mesh.elements_through": Param(3, "FEM elements through each arm outside the band", kind="int", low=1, high=40),
     "mesh.element_length": Param(0.0, "FEM element length along the beam; 0 = 2 d", unit="m", low=0.0),
     "load.ramp_time": Param(0.0, "time over which the load-point speed ramps up; 0 = two periods of the "

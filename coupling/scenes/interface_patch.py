@@ -25,7 +25,7 @@ from fem_region import materials, mesh
 from fem_region.explicit import ExplicitDynamics
 
 from ..checks import bound
-from ..params import Param, isotropic_material, positive
+from ..params import isotropic_material, Param, particle_radius
 from .common import make_region
 from .coupled_common import COUPLING, coupled_simulation
 
@@ -34,7 +34,7 @@ DESCRIPTION = "coupled: uniform strain across the interface, no spurious interfa
 MODES = ("coupled",)
 PARAMETERS = {
     **isotropic_material(10e9, 2000.0),
-    "particle.radius": positive(0.0005, "lattice sphere radius (spacing 2r)", "m"),
+    "particle.radius": particle_radius(0.0005, "lattice sphere radius (spacing 2r)"),
     "geometry.fem_columns": Param(4, "FEM elements along x", kind="int", low=1),
     "geometry.rows": Param(5, "FEM elements along y", kind="int", low=2),
     "geometry.lattice_columns": Param(8, "free lattice columns", kind="int", low=3),

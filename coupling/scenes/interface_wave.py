@@ -20,7 +20,7 @@ from fem_region.explicit import ExplicitDynamics, PrescribedMotion
 from fem_region.loads import sine_squared
 
 from ..checks import bound
-from ..params import Param, isotropic_material, positive
+from ..params import isotropic_material, Param, particle_radius, positive
 from .common import make_region
 from .coupled_common import COUPLING, coupled_simulation
 
@@ -29,7 +29,7 @@ DESCRIPTION = "coupled: pulse FEM -> DEM -> FEM, reflected < 2 %, transmitted > 
 MODES = ("coupled",)
 PARAMETERS = {
     **isotropic_material(1e9, 1000.0),
-    "particle.radius": positive(0.005, "sphere radius = half the FEM element length", "m"),
+    "particle.radius": particle_radius(0.005, "sphere radius = half the FEM element length"),
     "chain.left_elements": Param(60, "elements in the left strip", kind="int", low=10),
     "chain.particles": Param(40, "chain particles between the strips", kind="int", low=2),
     "chain.right_elements": Param(80, "elements in the right strip", kind="int", low=10),

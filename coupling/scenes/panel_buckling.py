@@ -69,7 +69,7 @@ from fem_region.explicit import ExplicitDynamics, PrescribedMotion
 from fem_region.modal import lowest_modes
 
 from ..checks import bound, check, within
-from ..params import Param, density, modulus, positive
+from ..params import density, modulus, Param, particle_radius, positive
 from . import delamination as dl
 from .common import FEM_OPTIONS, FemNodes, fem_only, make_region
 from .coupled_common import COUPLING, coupled_simulation
@@ -114,7 +114,7 @@ PARAMETERS = {
                                            low=0.0, high=50.0),
     "interface.friction": Param(0.0, "Coulomb friction of the delaminated faces in the DEM windows", low=0.0,
                                 high=2.0),
-    "particle.radius": positive(0.127e-3, "DEM particle radius r (coupled mode; spacing d = 2 r)", "m"),
+    "particle.radius": particle_radius(0.127e-3, "DEM particle radius r (coupled mode; spacing d = 2 r)"),
     "dem.window_ahead": positive(16e-3, "DEM window ahead of each tip, into the intact laminate (room to grow; "
                                  "the default leaves 3 mm to the clamps: with Table 1's toughness the delamination "
                                  "runs from the limit load through a 14 mm window)", "m"),

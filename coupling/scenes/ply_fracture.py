@@ -27,7 +27,7 @@ from dem_region.scene import DemScene
 from fem_region.failure import HoffmanStrengths
 
 from ..checks import check
-from ..params import Param, density, modulus, positive
+from ..params import density, modulus, Param, particle_radius, positive
 from .standalone import dem_only
 
 NAME = "ply_fracture"
@@ -59,7 +59,7 @@ PARAMETERS = {
     **PLY,
     "ply.angle": Param(90.0, "0: pull along the fibres; 90: fibres out of the slice's plane", choices=None,
                        low=0.0, high=90.0),
-    "particle.radius": positive(0.0625e-3, "particle radius r (spacing d = 2r)", "m"),
+    "particle.radius": particle_radius(0.0625e-3, "particle radius r (spacing d = 2r)"),
     "geometry.length": positive(1.5e-3, "strip length (below 2 E Gf / X^2, so that the strip's elastic energy "
                                 "cannot break a second section)", "m"),
     "geometry.height": positive(2e-3, "strip height", "m"),

@@ -32,7 +32,6 @@ from __future__ import annotations
 import ctypes
 import os
 import shutil
-from pathlib import Path
 from typing import Callable
 
 import numpy as np
