@@ -119,3 +119,36 @@ def test_resume_uses_the_last_complete_checkpoint(tmp_path):
     (run / "checkpoint" / "state.h5").write_bytes(b"")
     assert checkpoint.latest(run) == run / "checkpoint.old"
     assert checkpoint.corrupt(run) == str(run / "checkpoint" / "state.h5")
+
+
+# materials of the benchmark laminates (carbon and glass epoxies; E22 > G13 for the lattice)
+MATERIALS = st.tuples(st.floats(40e9, 180e9), st.floats(8e9, 12e9), st.floats(0.3, 0.7), st.floats(200.0, 1500.0))
+
+
+def _delamination_sets(case, material, crack):
+    E11, E22, g, GIc = material
+    return [f"--set=material.E11={E11}", f"--set=material.E22={E22}", f"--set=material.G13={g * E22}",
+            f"--set=interface.GIc={GIc}", f"--set=interface.GIIc={1.8 * GIc}", f"--set=geometry.crack_length={crack}"]
+
+
+def test_another_dcb_runs_with_the_automatic_substeps(femdem):
+    """The DCB with another material and crack length that stopped on the resonance guard
+    with the automatic substep count (issue #21): it runs to its end, energy balanced."""
+    code, s, _ = femdem("run", "dcb_coarse", *_delamination_sets("dcb_coarse", (40e9, 9e9, 0.39, 500.0), 40e-3))
+    assert code == 0, s["message"]
+    assert s["clock"]["substeps"] == int(s["clock"]["dt_stable_fem"] // s["clock"]["dt_stable_dem"]) > 1
+    assert s["energy"]["balance_error_rel"] < s["parameters"]["guards.energy_growth"]
+
+
+@pytest.mark.slow
+@settings(max_examples=4, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(case=st.sampled_from(["dcb_coarse", "enf_coarse", "mixed_mode_coarse"]), material=MATERIALS,
+       crack=st.floats(0.25, 0.45))
+def test_delamination_specimens_never_resonate(femdem, case, material, crack):
+    """Over materials and crack lengths (a quarter to 0.45 of the 80 mm specimen, inside the ENF
+    span), the automatic substep count never trips the resonance guard."""
+    code, s, _ = femdem("run", case, *_delamination_sets(case, material, crack * 80e-3))
+    assert code == 0, s["message"]
+    c = s["clock"]
+    assert c["substeps"] == max(1, int(c["dt_stable_fem"] // c["dt_stable_dem"]))
+    assert s["energy"]["balance_error_rel"] < s["parameters"]["guards.energy_growth"]
