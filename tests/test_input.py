@@ -238,3 +238,51 @@ def test_an_unforeseen_error_is_one_line_and_a_log(monkeypatch, capsys):
     assert len(err.splitlines()) == 1 and "ZeroDivisionError: a defect" in err and "traceback in" in err
     log = err.split("traceback in ")[1].rstrip(")")
     assert "ZeroDivisionError" in open(log).read()
+
+
+@pytest.mark.parametrize("run_json, checkpoint, words", [
+    ("{\"case_file\": ", None, ["run.json", "corrupt"]),
+    ("[1, 2]", None, ["run.json", "corrupt"]),
+    ("{\"case_file\": \"x.toml\", \"mode\": \"fem\"}", None, ["run.json", "corrupt", "dem"]),
+    (None, None, ["no run.json"]),
+    ("VALID", b"not an HDF5 file", ["checkpoint", "corrupt"]),
+    ("VALID", b"", ["checkpoint", "corrupt"]),
+])
+def test_corrupt_run_directories_are_named(tmp_path, capsys, run_json, checkpoint, words):
+    """--resume of a directory whose run.json or checkpoint is damaged: one line naming the
+    file, exit 2; the directory is left as it was."""
+    import json as _json
+    from coupling.cli import main
+    run = tmp_path / "r.partial"
+    run.mkdir()
+    if run_json == "VALID":
+        run_json = _json.dumps({"case": "bar_wave", "case_file": "bar_wave", "mode": "fem", "dem": "liggghts",
+                                "parameters": {}})
+    if run_json is not None:
+        (run / "run.json").write_text(run_json)
+    if checkpoint is not None:
+        (run / "checkpoint").mkdir()
+        (run / "checkpoint" / "state.h5").write_bytes(checkpoint)
+    before = sorted(p.name for p in run.rglob("*"))
+    assert main(["run", "--resume", str(run), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1, err
+    for w in words:
+        assert w in err, (w, err)
+    assert sorted(p.name for p in run.rglob("*")) == before
+
+
+def test_compare_reports_an_engine_that_errored_as_an_error(tmp_path, monkeypatch, capsys):
+    """An engine that failed (status error) makes compare exit 1, not 3 (an instability)."""
+    from coupling import compare
+    from coupling.cli import main
+    real = compare.execute
+
+    def failing(case, mode, engine, out, quiet):
+        code, d, s = real(case, mode, engine, out, quiet)
+        if engine == "liggghts":
+            s = dict(s, status="error", message="RuntimeError: the engine failed")
+        return code, d, s
+    monkeypatch.setattr(compare, "execute", failing)
+    assert main(["compare", "chain_consistency", "--dem", "yade,liggghts", "--out", str(tmp_path / "c")]) == 1
+    assert "error" in capsys.readouterr().out
