@@ -113,11 +113,11 @@ def refuse_ineffective(case: Case, mode: str, dem: str | None) -> None:
     if mode == "fem" and dem is not None:
         raise CaseError(f"--dem {dem}: --mode fem runs no DEM engine; allowed: leave --dem out")
     no_dem = ("dem.", "particle.", "interface.tie", "clock.substeps")
-    no_tie = ("interface.tie", "clock.substeps")
+    no_tie = ("interface.tie", "clock.substeps", "dem.half_width")  # all-DEM: the zone is the whole body
     schema = {**COMMON, **case.scene.PARAMETERS}
     for key in sorted(k for k in case.given if p[k] != schema[k].default):  # the default changes nothing
         if mode == "fem" and key.startswith(no_dem) or mode == "dem" and key.startswith(no_tie):
-            raise CaseError(f"{key}: has no effect in --mode {mode} (no {'DEM zone' if mode == 'fem' else 'FEM-DEM tie'}); "
+            raise CaseError(f"{key}: has no effect in --mode {mode} (no {'DEM zone' if mode == 'fem' else 'FEM-DEM tie or zone edge'}); "
                             "allowed: leave it out, or another --mode")
     if p.get("interface.tie") == "kinematic" and p.get("interface.tie_penalty"):
         raise CaseError(f"interface.tie_penalty = {p['interface.tie_penalty']:g}: has no effect with "

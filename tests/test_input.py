@@ -185,6 +185,7 @@ def test_case_files_with_a_byte_order_mark_are_read(femdem, tmp_path, encoding):
     (["run", "--resume", "{tmp}/afile"], ["--resume", "run.json"]),
     (["run", "chain_consistency", "--mode", "dem", "--set", "interface.tie=penalty"], ["interface.tie", "no effect"]),
     (["run", "chain_consistency", "--mode", "fem", "--set", "dem.process=worker"], ["dem.process", "no effect"]),
+    (["run", "beam_impact_coarse", "--mode", "dem", "--set", "dem.half_width=6e-3"], ["dem.half_width", "no effect"]),
     (["run", "chain_consistency", "--set", "dem.ranks=2", "--dem", "yade"], ["dem.ranks = 2", "lammps"]),
     (["run", "chain_consistency", "--set", "particle.radius=1e-12"], ["particle.radius", "implausible"]),
     (["run", "chain_consistency", "--set", "chain.particles=1000000000"], ["chain.particles", "<= 100000"]),
