@@ -220,11 +220,14 @@ def test_bad_command_line_catalogue(tmp_path, monkeypatch, capsys, args, words):
 
 
 def test_a_model_too_large_for_the_memory_is_refused_with_its_estimate(femdem):
-    """Lattices and meshes are sized before any array of them exists: a zone of 1e12
-    particles is refused with its estimate, in one line (exit 2)."""
-    code, summary, err = femdem("run", "dcb_coarse", "--set", "particle.radius=1e-6")
+    """Meshes and lattices are sized before any array of them exists: a mesh of 3e8 nodes is
+    refused with its estimate, in one line (exit 2); so is a lattice of 1e15 particles."""
+    code, summary, err = femdem("run", "bar_wave", "--set", "mesh.elements_along=100000000")
     assert code == 2 and summary is None, err
-    assert len(err.strip().splitlines()) == 1 and "GiB" in err and "allowed" in err
+    assert len(err.strip().splitlines()) == 1 and "FEM nodes" in err and "GiB" in err and "allowed" in err
+    from dem_region.scene import TooLarge, check_fits
+    with pytest.raises(TooLarge, match="particles need about"):
+        check_fits(1e15, "a lattice")
 
 
 def test_an_unforeseen_error_is_one_line_and_a_log(monkeypatch, capsys):

@@ -82,7 +82,7 @@ def _kill_when(proc, ready, timeout=600):
 def test_killed_case_resumes_to_the_uninterrupted_result(tmp_path, case):
     here = tmp_path / "elsewhere"  # not the project: relative paths must still work
     here.mkdir()
-    every = ["--set", "output.checkpoint_every=20"]
+    every = ["--set", "output.checkpoint_every=500"]  # early, and not thousands of them
     straight = _femdem(here, "run", case, *every, "--out", "straight")
     if straight.returncode == 2 and "output.checkpoint_every" in straight.stderr:  # cannot checkpoint
         every = []
@@ -114,8 +114,8 @@ def test_killed_case_resumes_to_the_uninterrupted_result(tmp_path, case):
 def test_resume_after_the_engine_worker_alone_was_killed(tmp_path):
     """The engine's worker process dies: the run ends with status error and keeps its last
     checkpoint; --resume finishes it to the uninterrupted result."""
-    args = ["run", "coupled_vibration", "--set", "dem.process=worker", "--set", "run.steps=20000",
-            "--set", "output.checkpoint_every=2000", "--set", "clock.substeps=2"]
+    args = ["run", "coupled_vibration", "--set", "dem.process=worker", "--set", "run.steps=6000",
+            "--set", "output.checkpoint_every=1000", "--set", "clock.substeps=2"]
     assert _femdem(tmp_path, *args, "--out", "straight").returncode == 0
     proc = _femdem(tmp_path, *args, "--out", "killed", wait=False)
     partial = tmp_path / "killed.partial"
@@ -145,7 +145,7 @@ def test_resume_after_the_engine_worker_alone_was_killed(tmp_path):
 def test_a_running_run_cannot_be_resumed_or_shared(tmp_path):
     """While a run lives, --resume of its directory and a second run into the same --out are
     refused (exit 2, one line); the running run is untouched and finishes."""
-    args = ["run", "coupled_vibration", "--set", "run.steps=40000"]
+    args = ["run", "coupled_vibration", "--set", "run.steps=20000"]
     proc = _femdem(tmp_path, *args, "--out", "r", wait=False)
     t0 = time.time()
     while not (tmp_path / "r.partial" / "run.json").exists() and time.time() - t0 < 60:
