@@ -119,6 +119,9 @@ def refuse_ineffective(case: Case, mode: str, dem: str | None) -> None:
         if mode == "fem" and key.startswith(no_dem) or mode == "dem" and key.startswith(no_tie):
             raise CaseError(f"{key}: has no effect in --mode {mode} (no {'DEM zone' if mode == 'fem' else 'FEM-DEM tie or zone edge'}); "
                             "allowed: leave it out, or another --mode")
+    if "run.steps" in schema and "clock.t_end" in case.given and p["clock.t_end"]:
+        raise CaseError(f"clock.t_end = {p['clock.t_end']:g}: has no effect, case {case.name} runs run.steps clock "
+                        "steps; allowed: 0, or set run.steps")
     if p.get("interface.tie") == "kinematic" and p.get("interface.tie_penalty"):
         raise CaseError(f"interface.tie_penalty = {p['interface.tie_penalty']:g}: has no effect with "
                         "interface.tie = 'kinematic'; allowed: 0, or interface.tie = 'penalty'")

@@ -120,6 +120,9 @@ def _cases() -> int:
 def _run(args) -> int:
     from .case import refuse_ineffective
     from .run import execute, resume
+    for flag in ("out", "resume"):
+        if getattr(args, flag) == "":
+            raise CaseError(f"--{flag} '': empty; allowed: a directory path")
     if args.resume:
         ignored = [f"--{k}" for k in ("dem", "mode", "set", "out") if getattr(args, k)] + (["CASE"] if args.case else [])
         if ignored:
@@ -134,7 +137,7 @@ def _run(args) -> int:
     if args.dem is not None and args.dem not in ENGINES:
         raise CaseError(f"--dem {args.dem}: allowed {', '.join(ENGINES)}")
     case = load_case(args.case, parse_set(args.set))
-    mode = args.mode or case.scene.MODES[0]
+    mode = case.scene.MODES[0] if args.mode is None else args.mode
     if mode not in MODES:
         raise CaseError(f"--mode {mode}: allowed {', '.join(MODES)}")
     refuse_ineffective(case, mode, args.dem)

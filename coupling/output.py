@@ -163,7 +163,7 @@ class RunOutput:
                 g.create_dataset(k, data=np.asarray(v, dtype=float))
             g.attrs["units"] = "SI"
         tmp = self.dir / "summary.json.tmp"
-        tmp.write_text(json.dumps(summary, indent=2, default=_jsonable) + "\n")
+        tmp.write_text(json.dumps(_no_nan(summary), indent=2, default=_jsonable, allow_nan=False) + "\n")
         os.replace(tmp, self.dir / "summary.json")
         for name in ("checkpoint.old", "checkpoint.tmp") + (() if keep_checkpoint else ("checkpoint",)):
             shutil.rmtree(self.dir / name, ignore_errors=True)
@@ -174,6 +174,19 @@ class RunOutput:
         os.replace(self.dir, self.final)
         self._lock.close()
         return self.final
+
+
+def _no_nan(x):
+    """JSON has no NaN or infinity: a quantity that was never reached is written as null."""
+    if isinstance(x, dict):
+        return {k: _no_nan(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_no_nan(v) for v in x]
+    if isinstance(x, (float, np.floating)) and not np.isfinite(x):
+        return None
+    if isinstance(x, np.ndarray):
+        return _no_nan(x.tolist())
+    return x
 
 
 def _write_atomic(path: Path, fill) -> None:

@@ -73,7 +73,10 @@ class Param:
                 raise bad
             value = int(value)
         else:
-            value = float(value)
+            try:
+                value = float(value)
+            except OverflowError:  # an integer of hundreds of digits
+                raise bad from None
             if not math.isfinite(value):
                 raise bad
         if self.low is not None and (value < self.low or (self.open_low and value == self.low)):

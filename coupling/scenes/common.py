@@ -41,7 +41,12 @@ def time_step(p: dict, dt_stable: float) -> float:
 def n_steps(p: dict, t_end_default: float, dt: float) -> tuple[int, float]:
     """(steps, dt) such that steps * dt = t_end exactly, dt not above the given dt."""
     t_end = p["clock.t_end"] or t_end_default
-    n = max(1, math.ceil(t_end / dt - 1e-9))
+    ratio = t_end / dt
+    if not ratio <= p["clock.max_steps"]:  # (also inf: a denormal dt) refused before anything runs
+        raise CaseError(f"clock.max_steps = {p['clock.max_steps']}: this run needs {ratio:.3g} clock steps "
+                        f"({t_end:.4g} s at dt = {dt:.4g} s); allowed: raise clock.max_steps, or shorten clock.t_end "
+                        "or raise clock.dt")
+    n = max(1, math.ceil(ratio - 1e-9))
     return n, t_end / n
 
 
