@@ -51,7 +51,7 @@ def operators(clock) -> dict:
     """Sparse operators of the linearised step: FEM K, particle springs Kp, the maps from
     node and free-particle displacements to every particle's, masses, prescribed FEM DOFs."""
     fem, sc, itf = clock.fem, clock.dem.scene, clock.tie.itf
-    dim, nn, n = fem.region.dim, fem.region.n_nodes, sc.n
+    dim, n = fem.region.dim, sc.n
     pairs, kn, ks = [sc.bonds], [sc.kn * np.ones(len(sc.bonds))], [sc.ks * np.ones(len(sc.bonds))]
     for m in clock.models:
         if hasattr(m, "pairs"):
@@ -128,9 +128,9 @@ def main() -> int:
     for band in (False, True):
         Kb, Ks = band_split(ops, band)
         for m in a.substeps:
-            dt = sim_dt = 0.9 * min(ci["dt_stable_fem"], m * ci["dt_stable_dem"])
+            dt = 0.9 * min(ci["dt_stable_fem"], m * ci["dt_stable_dem"])
             t0 = time.perf_counter()
-            g = [growth(ops, Kb, Ks, sim_dt, m, a.steps, s) for s in a.scales]
+            g = [growth(ops, Kb, Ks, dt, m, a.steps, s) for s in a.scales]
             print(f"band {'on ' if band else 'off'} m = {m:2d} (dt = {dt:.3g} s): energy growth over {a.steps} steps "
                   + ", ".join(f"x {x:.3g} (stiffness x {s:g})" for x, s in zip(g, a.scales))
                   + f"  [{time.perf_counter() - t0:.1f} s]", flush=True)
