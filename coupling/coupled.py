@@ -34,6 +34,7 @@ import numpy as np
 from dem_region.backends.base import DemBackend
 from dem_region.kernels import add_rows
 from fem_region.explicit import ExplicitDynamics
+from fem_region.kernels import respa_kicks
 
 from .simulation import Stage
 
@@ -119,6 +120,8 @@ class CoupledClock:
         band = self.m > 1 and self.fast_band
         self.band_elements = interface_band(fem.region, tie.itf.W) if band else np.zeros(0, int)
         self._band = fem.region.element_force(self.band_elements) if self.band_elements.size else None
+        shape = fem.state.v.shape  # the kicks' buffers (respa_kicks), rewritten at every DEM step
+        self._f_fast, self._a_slow, self._no_band = np.zeros(shape), np.zeros(shape), np.zeros((0, shape[1]))
         dem.set_dt(self.dt_dem)
         dem.start(self._between)
 
@@ -131,15 +134,15 @@ class CoupledClock:
         t_law = clock()
         f_tie = self.f_tie = self.tie.fast_force(fem.region.X + fem.state.u)
         t1 = clock()
-        f_fast = f_tie if self._band is None else f_tie - self._band(fem.state.u)
-        if self.k % self.m == 0:
+        band = self._no_band if self._band is None else self._band(fem.state.u)
+        slow = self.k % self.m == 0
+        if slow:
             fem.compute_forces()  # the FEM's own forces at t_n
-            a_slow = fem.state.a if self._band is None else fem.state.a - (f_fast - f_tie) / fem.m[:, None]
             n = self.k // self.m
-            if n % self.snapshot_every == 0 or n == self.last_window:
-                self._snapshot(f_fast, a_slow)
-            fem.state.v += self.dt * a_slow
-        fem.state.v += self.dt_dem * f_fast / fem.m[:, None]
+            if n % self.snapshot_every == 0 or n == self.last_window:  # at t_n, before the kicks
+                self._kicks(band, slow, False)
+                self._snapshot(self._f_fast, self._a_slow)
+        self._kicks(band, slow, True)
         fem.drift(self.dt_dem)
         self.interface_work += self.dt_dem * float(np.vdot(f_tie, fem.state.v))
         t2 = clock()
@@ -148,6 +151,12 @@ class CoupledClock:
         self.inner["interface"] += (t1 - t_law) + (clock() - t2)
         self.inner["models"] += t_law - t0
         self.inner["fem"] += t2 - t1
+
+    def _kicks(self, band: np.ndarray, slow: bool, kick: bool) -> None:
+        """f_fast = f_tie - band, a_slow (at a FEM step) and, with ``kick``, the FEM's kicks."""
+        s = self.fem.state
+        respa_kicks(s.v, s.a, self.f_tie, band, self.fem.m, self.dt, self.dt_dem, slow, kick, self._f_fast,
+                    self._a_slow)
 
     def _snapshot(self, f_fast: np.ndarray, a_slow: np.ndarray) -> None:
         """Energies, momentum and FEM state at t_n = k dt_dem, all at that time level: the

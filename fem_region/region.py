@@ -207,8 +207,8 @@ class FemRegion:
     def element_force(self, elements: np.ndarray):
         """The internal force of the elements ``elements`` (k,) alone, as a function
         u (n_nodes, dim) m -> (n_nodes, dim) N; with every element it is ``internal_force``.
-        Precomputed (a sparse stiffness, or the sliced kernel data): no allocation per call
-        beyond the result."""
+        Precomputed (a sparse stiffness, or the sliced kernel data). The Total Lagrangian form
+        writes into one buffer of its own, overwritten by the next call: no allocation per call."""
         e = np.asarray(elements, int)
         if self.formulation == "linear":
             ed, ke = self._edofs[e], self.ke[e]
@@ -222,8 +222,10 @@ class FemRegion:
         hg = self.hg if self.hg is not None and self.hg.form == "stiffness" else None
         gamma, k = (hg.gamma[e], hg.k[e]) if hg else (None, None)
 
+        f = np.zeros((self.n_nodes, self.dim))
+
         def force(u: np.ndarray) -> np.ndarray:
-            f = np.zeros_like(u, dtype=float)
+            f[:] = 0.0
             uc = np.ascontiguousarray(u, dtype=float)
             for dN, dx, D in rules:
                 total_lagrangian_force(uc, conn, dN, dx, D, voigt, f)

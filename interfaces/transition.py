@@ -15,6 +15,8 @@ import skfem
 
 from fem_region.region import FemRegion
 
+from .kernels import csr_times
+
 
 class InterfaceError(ValueError):
     """An interface particle without a host element, or weights that do not sum to one."""
@@ -30,6 +32,9 @@ class TransitionInterface:
 
     def __post_init__(self):
         self._WT = self.W.T.tocsr()  # the transpose map, built once (scipy makes a new one per .T)
+        # the maps' results, rewritten in place at every call (the coupled step's buffers)
+        self._at_particles = np.zeros((len(self.ids), 3))
+        self._at_nodes = np.zeros((self.W.shape[1], self.dim))
 
     @classmethod
     def build(cls, region: FemRegion, x: np.ndarray, ids: np.ndarray, tol: float = 1e-9) -> "TransitionInterface":
@@ -75,14 +80,18 @@ class TransitionInterface:
                              "inside or on the boundary of the FEM region")
 
     def to_particles(self, nodal: np.ndarray) -> np.ndarray:
-        """nodal (n_nodes, dim) -> (k, 3) values at the interface particles (z = 0 in 2D)."""
-        out = np.zeros((len(self.ids), 3))
-        out[:, : self.dim] = self.W @ nodal
-        return out
+        """nodal (n_nodes, dim) -> (k, 3) values at the interface particles (z = 0 in 2D); the
+        result is this interface's buffer, overwritten by the next call."""
+        W = self.W
+        csr_times(W.indptr, W.indices, W.data, np.ascontiguousarray(nodal, float), self._at_particles[:, : self.dim])
+        return self._at_particles
 
     def to_nodes(self, F: np.ndarray) -> np.ndarray:
-        """F (k, 3) N on the particles -> (n_nodes, dim) N on the nodes (transpose map)."""
-        return self._WT @ F[:, : self.dim]
+        """F (k, 3) N on the particles -> (n_nodes, dim) N on the nodes (transpose map); the
+        result is this interface's buffer, overwritten by the next call."""
+        WT = self._WT
+        csr_times(WT.indptr, WT.indices, WT.data, np.ascontiguousarray(F, float), self._at_nodes)
+        return self._at_nodes
 
     def share_mass(self, m: np.ndarray) -> np.ndarray:
         """m (k,) kg of the interface particles -> (n_nodes,) kg added to the nodes."""
