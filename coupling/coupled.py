@@ -124,6 +124,11 @@ class CoupledClock:
         self._f_fast, self._a_slow, self._no_band = np.zeros(shape), np.zeros(shape), np.zeros((0, shape[1]))
         dem.set_dt(self.dt_dem)
         dem.start(self._between)
+        # the first hook ran at set-up, outside the clock's "dem" stage: not to be taken out of
+        # it (numba compiling there made the engine bucket negative)
+        self.inner = dict.fromkeys(self.inner, 0.0)
+        if hasattr(dem, "transport_s"):
+            dem.transport_s = 0.0
 
     def _between(self) -> None:
         clock = time.perf_counter

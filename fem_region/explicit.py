@@ -185,7 +185,9 @@ class ExplicitDynamics:
         if self._prescribed.size:
             # the support supplies what the prescribed path needs beyond the residual force
             a_pres = self._prescribed_acceleration()
-            reaction = self.m.repeat(self.region.dim)[self._prescribed] * a_pres - f.reshape(-1)[self._prescribed]
+            if getattr(self, "_m_prescribed_of", None) is not self.m:  # the prescribed DOFs' masses, per mass array
+                self._m_prescribed, self._m_prescribed_of = self.m.repeat(self.region.dim)[self._prescribed], self.m
+            reaction = self._m_prescribed * a_pres - f.reshape(-1)[self._prescribed]
             L.support_work += 0.5 * float(np.vdot(self._reaction_prev + reaction, du.reshape(-1)[self._prescribed]))
             self._reaction_prev = reaction
             a.reshape(-1)[self._prescribed] = a_pres
@@ -305,14 +307,14 @@ class ExplicitDynamics:
                     external_work=L.external_work + L.support_work, dissipated=L.damping + contact_loss)
 
     def _damping_force(self, v: np.ndarray) -> np.ndarray:
-        f = 0.0
+        f = None
         if self.alpha:
             f = self.alpha * self.m[:, None] * v
         if self.beta:
-            f = f + self.beta * (self.region.K @ v.ravel()).reshape(v.shape)
+            f = (0.0 if f is None else f) + self.beta * (self.region.K @ v.ravel()).reshape(v.shape)
         hg = self.region.hourglass_viscous_force(v)
         if hg is not None:
-            f = f + hg
+            f = (0.0 if f is None else f) + hg
         if self.bulk_viscosity is not None:
-            f = f + self.bulk_viscosity.force(v)
-        return np.zeros_like(v) + f
+            f = (0.0 if f is None else f) + self.bulk_viscosity.force(v)
+        return np.zeros_like(v) if f is None else f

@@ -142,8 +142,12 @@ class FemRegion:
 
     @property
     def X(self) -> np.ndarray:
-        """(n_nodes, dim) m, reference coordinates."""
-        return self.mesh.p.T
+        """(n_nodes, dim) m, reference coordinates (a C-contiguous copy of mesh.p.T, made once:
+        the coupled step adds it to u at every DEM step)."""
+        p = self.mesh.p
+        if getattr(self, "_X_of", None) is not p:
+            self._X, self._X_of = np.ascontiguousarray(p.T), p
+        return self._X
 
     def _masked_D(self, voigt: list[int]) -> np.ndarray:
         Dm = np.zeros_like(self.D)
