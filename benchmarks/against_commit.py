@@ -72,7 +72,7 @@ def main() -> None:
     ap.add_argument("runs", nargs="+", metavar="CASE:MODE:ENGINE[:KEY=VALUE,...]")
     args = ap.parse_args()
     scratch = Path(tempfile.mkdtemp(prefix="femdem-against-"))
-    base = scratch / "base"
+    base, outs = scratch / "worktree", scratch / "runs"
     subprocess.run(["git", "worktree", "add", "--detach", str(base), args.base], cwd=ROOT, check=True,
                    capture_output=True)
     for venv in (".venv", ".venv-lammps"):  # the LAMMPS worker's environment is found beside the code
@@ -83,16 +83,16 @@ def main() -> None:
             case, mode, engine, *rest = spec.split(":")
             sets = rest[0].split(",") if rest else []
             for tree in (base, ROOT):  # compiles either side's numba caches, if stale
-                run(tree, case, mode, engine, sets, scratch / "warm")
+                run(tree, case, mode, engine, sets, outs / "warm")
             walls = {"base": [], "this": []}
             for _ in range(args.repeat):
                 for side, tree in (("base", base), ("this", ROOT)):
-                    walls[side].append(run(tree, case, mode, engine, sets, scratch / side))
+                    walls[side].append(run(tree, case, mode, engine, sets, outs / side))
             tb, tt = (statistics.median(walls[s]) for s in ("base", "this"))
             print(f"{spec}: base {tb:.1f} s, this {tt:.1f} s, ratio {tb / tt:.2f}; "
-                  f"{sameness(scratch / 'base', scratch / 'this')}")
+                  f"{sameness(outs / 'base', outs / 'this')}")
             for side in ("base", "this"):
-                t = json.loads((scratch / side / "summary.json").read_text())["timing_s"]
+                t = json.loads((outs / side / "summary.json").read_text())["timing_s"]
                 print(f"    {side:4s} " + ", ".join(f"{k} {v:.1f}" for k, v in t.items()))
             sys.stdout.flush()
     finally:
