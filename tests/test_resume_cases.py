@@ -104,7 +104,10 @@ def test_killed_case_resumes_to_the_uninterrupted_result(tmp_path, case):
     assert r.returncode == 0, r.stderr
     a, b = _results(here / "straight"), _results(killed)
     assert a.keys() == b.keys()
-    for k in a:
+    # whether a calibration came from the user's cache depends on what ran before (the first
+    # run on a fresh machine computes it, the resumed one finds it): the calibrated values
+    # themselves are compared
+    for k in set(a) - {"history/calibration_cache_hit"}:
         assert _same(a[k], b[k]), k
     leftovers = {p.name for p in killed.iterdir()} - {"summary.json", "history.h5", "fields.xdmf", "fields.h5",
                                                                   "plots", "run.json"}
