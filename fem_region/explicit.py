@@ -307,14 +307,14 @@ class ExplicitDynamics:
                     external_work=L.external_work + L.support_work, dissipated=L.damping + contact_loss)
 
     def _damping_force(self, v: np.ndarray) -> np.ndarray:
-        f = None
+        f = 0.0
         if self.alpha:
             f = self.alpha * self.m[:, None] * v
         if self.beta:
-            f = (0.0 if f is None else f) + self.beta * (self.region.K @ v.ravel()).reshape(v.shape)
+            f = f + self.beta * (self.region.K @ v.ravel()).reshape(v.shape)
         hg = self.region.hourglass_viscous_force(v)
         if hg is not None:
-            f = (0.0 if f is None else f) + hg
+            f = f + hg
         if self.bulk_viscosity is not None:
-            f = (0.0 if f is None else f) + self.bulk_viscosity.force(v)
-        return np.zeros_like(v) if f is None else f
+            f = f + self.bulk_viscosity.force(v)
+        return f if isinstance(f, np.ndarray) else np.zeros_like(v)
