@@ -27,6 +27,8 @@ def _parser() -> argparse.ArgumentParser:
     d = sub.add_parser("doctor", help="engines, versions, MPI stacks, what is missing")
     d.add_argument("--json", action="store_true")
     sub.add_parser("cases", help="list bundled cases")
+    k = sub.add_parser("params", help="a case's parameters: dotted key, value, allowed range, unit, meaning")
+    k.add_argument("case", help="bundled case name or path to a .toml case file")
     r = sub.add_parser("run", help="run a case")
     r.add_argument("case", nargs="?", help="bundled case name or path to a .toml case file")
     # LIGGGHTS by default: the fastest path (zero-copy arrays; YADE's per-particle Python calls
@@ -34,7 +36,8 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--dem", default=None, help=f"DEM engine: {', '.join(ENGINES)} (default {DEFAULT_ENGINE})")
     r.add_argument("--mode", default=None, help=f"{', '.join(MODES)} (default: the case's first mode)")
     r.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                   help="override a parameter by its dotted key (as echoed in summary.json)")
+                   help="override a parameter by its dotted key (as echoed in summary.json); keys, "
+                        "values and allowed ranges: femdem params CASE")
     r.add_argument("--out", default=None, help="run directory (default runs/<case>-<mode>-<time>)")
     r.add_argument("--quiet", action="store_true", help="no progress bar")
     r.add_argument("--resume", default=None, metavar="DIR", help="continue a stopped run from its last checkpoint")
@@ -93,6 +96,8 @@ def _main(argv: list[str] | None) -> int:
             return doctor(as_json=args.json)
         if args.command == "cases":
             return _cases()
+        if args.command == "params":
+            return _params(args.case)
         if args.command == "run":
             return _run(args)
         if args.command == "compare":
@@ -114,6 +119,16 @@ def _cases() -> int:
             print(f"{name:24s} {'/'.join(case.scene.MODES):18s} {case.description}")
         except CaseError as exc:
             print(f"{name:24s} (invalid: {exc})")
+    return 0
+
+
+def _params(name: str) -> int:
+    """One line per parameter of the case: key = value (the case file's), allowed, meaning."""
+    from .case import COMMON
+    case = load_case(name)
+    schema = {**COMMON, **case.scene.PARAMETERS}
+    for key in sorted(schema):
+        print(f"{key} = {case.parameters[key]!r}  # {schema[key].allowed()}; {schema[key].doc}")
     return 0
 
 

@@ -40,6 +40,8 @@ def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool,
     status, message = "ok", ""
     try:
         sim = scene.build(case.parameters, mode, dem)
+        for line in sim.warnings:
+            print(f"femdem: warning: {line}", file=sys.stderr)
         if case.parameters["output.checkpoint_every"] and sim.checkpoint is None:
             raise CaseError(f"output.checkpoint_every = {case.parameters['output.checkpoint_every']}: this run cannot "
                             f"checkpoint ({_why_no_checkpoint(sim, dem)}); allowed: 0 (a killed run then resumes "
@@ -97,6 +99,7 @@ def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool,
         "timing_s": dict(result["timing_s"], total=time.perf_counter() - t_start),
         "memory_peak_mb": _memory_peak_mb(),
         "energy": result["energy"], "qoi": qoi, "checks": checks, "status": status, "message": message,
+        "warnings": sim.warnings if sim else [],
     }
     final = writer.finish(summary, result["history"], keep_checkpoint=status != "ok")
     return {"ok": 0, "unstable": 3, "error": 1}[status], final, summary

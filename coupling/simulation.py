@@ -77,6 +77,9 @@ class Simulation:
     # name -> (time s, capture() -> {field: array}): arrays taken at the first sample at or
     # after that time (damage pictures), returned in the history as "<name>.<field>"
     snapshots: dict[str, tuple[float, Callable[[], dict[str, np.ndarray]]]] = field(default_factory=dict)
+    # what the scene could model only with a compromise, or not as well as its checks assume:
+    # one line each, printed before the run and kept in summary.json
+    warnings: list[str] = field(default_factory=list)
 
 
 def energy_scale(e: dict[str, float]) -> float:

@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..checks import bound, check
-from ..params import Param, positive
+from ..params import CaseError, Param
 from . import delamination as dl
 from .coupled_common import COUPLING, coupled_simulation
 
@@ -26,11 +26,13 @@ DESCRIPTION = "coupled: DCB mode I delamination, load-opening vs corrected beam 
 MODES = ("coupled",)
 PARAMETERS = {
     **dl.PARAMETERS,
-    "geometry.crack_length": positive(32.9e-3, "initial crack length a0 from the load line", "m"),
+    "geometry.crack_length": dl.ranged(32.9e-3, "initial crack length a0 from the load line, at least 8 h", "m",
+                                       15e-3, 100e-3),
     "load.final_opening_factor": Param(2.2, "final opening / closed-form opening at the peak load", low=1.2,
                                        high=6.0),
     "load.duration_periods": Param(10.0, "loading time in periods of the initially cracked arm", low=2.0),
-    "dem.margin": positive(4e-3, "DEM window beyond the final crack tip and behind a0", "m"),
+    "dem.margin": dl.ranged(4e-3, "DEM window behind a0, and beyond the final crack tip if longer than the "
+                            "cohesive zone", "m", 1e-3, 20e-3),
     **COUPLING,
 }
 
@@ -49,15 +51,51 @@ def propagation_load(cf: dict, delta: np.ndarray) -> np.ndarray:
     return cf["S"] ** 1.5 * np.sqrt(8 / (np.asarray(delta) * cf["Ebh3"]))
 
 
+def validity(p: dict) -> list[str]:
+    """The specimen's domain: raises CaseError for what it cannot model (a crack too short for
+    beam theory, a crack path that leaves the specimen, strengths linear softening cannot
+    start from); returns the warnings of what it models with a compromise."""
+    cf = closed_form(p)
+    window(p, cf, final_crack_length(p, cf))
+    return dl.strength_warnings(p, 2 * p["particle.radius"])
+
+
+def final_crack_length(p: dict, cf: dict) -> float:
+    """m, the crack length at the final opening by corrected beam theory."""
+    delta_end = p["load.final_opening_factor"] * cf["delta_peak"]
+    return float(np.sqrt(delta_end * cf["Ebh3"] / (8 * cf["S"])) - dl.chi(p) * p["geometry.arm_thickness"])
+
+
+def window(p: dict, cf: dict, a_end: float) -> tuple[float, float]:
+    """(x_a, x_b) m, the DEM window: from dem.margin behind a0 to the final crack tip a_end
+    (corrected beam theory at the final opening) plus its cohesive zone
+    (delamination.cohesive_zone_length) or dem.margin, whichever is longer. Refused when that
+    runs closer than 4 h to the specimen's end (the closed form's arms then lose their
+    built-in root), with the largest final opening that fits."""
+    h, L, a0 = p["geometry.arm_thickness"], p["geometry.length"], p["geometry.crack_length"]
+    if a0 < 8 * h:
+        raise CaseError(f"geometry.crack_length = {a0:g}: shorter than 8 arm thicknesses (8 h = {8 * h:g} m); "
+                        "corrected beam theory is the check only for slender arms; allowed: >= 8 h")
+    Z0 = dl.resolved_strengths(p, 2 * p["particle.radius"])[0]
+    ahead = max(p["dem.margin"], dl.cohesive_zone_length(p, p["interface.GIc"], Z0, "I"))
+    x_b, limit = a_end + ahead, L - 4 * h
+    if x_b > limit:
+        A_max = limit - ahead + dl.chi(p) * h
+        f_max = 8 * cf["S"] * A_max**2 / cf["Ebh3"] / cf["delta_peak"]
+        raise CaseError(f"load.final_opening_factor = {p['load.final_opening_factor']:g}: the crack would run to "
+                        f"{a_end:.4g} m and its cohesive zone {ahead:.3g} m further, past geometry.length - 4 h = "
+                        f"{limit:.4g} m; allowed: load.final_opening_factor <= {f_max:.3g}, or geometry.length >= "
+                        f"{x_b + 4 * h:.4g} m")
+    return max(0.0, a0 - p["dem.margin"]), x_b
+
+
 def build(p: dict, mode: str, dem: str):
     cf = closed_form(p)
     h = p["geometry.arm_thickness"]
     delta_end = p["load.final_opening_factor"] * cf["delta_peak"]
-    A_end = np.sqrt(delta_end * cf["Ebh3"] / (8 * cf["S"]))
-    a_end = A_end - dl.chi(p) * h
     a0 = p["geometry.crack_length"]
-    x_a = max(0.0, a0 - p["dem.margin"])
-    x_b = min(a_end + p["dem.margin"], p["geometry.length"] - 4 * h)
+    warnings = validity(p)
+    x_a, x_b = window(p, cf, final_crack_length(p, cf))
     omega = dl.cantilever_omega(p, a0)
     spec = dl.build_specimen(p, a0, x_a, x_b, omega)
     t_load = p["load.duration_periods"] * 2 * np.pi / omega
@@ -81,8 +119,10 @@ def build(p: dict, mode: str, dem: str):
         "opening": lambda: float(fem.state.u[spec.upper_end, 1].mean() - fem.state.u[spec.lower_end, 1].mean()),
         "crack_tip": lambda: dl.crack_tip(bonds),
         "interface_dissipated": lambda: wf * bonds.dissipated_energy(),
+        "cohesive_zone_bonds": lambda: dl.softening_bonds(bonds),
     })
     sim.counts["law_bonds"] = len(bonds.pairs)
+    sim.warnings += warnings
     return sim
 
 
@@ -94,6 +134,7 @@ def evaluate(p: dict, h: dict, mode: str):
     Z0, R0 = dl.resolved_strengths(p, 2 * p["particle.radius"])
     qoi = {"Z0_used": Z0, "R0_used": R0, "peak_load": float(P[k]), "opening_at_peak": float(delta[k])}
     qoi["initial_compliance"] = dl.initial_compliance(P, delta, k, 0.4)
+    qoi.update(dl.cohesive_zone_qoi(p, h, k, p["interface.GIc"], Z0, "I"))
     branch = (delta > 1.15 * cf["delta_peak"]) & (np.arange(len(P)) > k)
     rel = P[branch] / propagation_load(cf, delta[branch]) - 1
     qoi["propagation_rms_error"] = float(np.sqrt(np.mean(rel**2))) if rel.size else float("nan")

@@ -46,8 +46,13 @@ def closed_form(p: dict) -> dict:
     return {"P_peak": Pc, "B": B, "Gc": Gc, "C0": C, "delta_peak": Pc * C}
 
 
+def validity(p: dict) -> list[str]:
+    """enf.validity with the mode I zone (G_II / G is about 0.4) and this case's 10 % tolerance."""
+    return enf.validity(p, "I", 0.5)
+
+
 def build(p: dict, mode: str, dem: str):
-    return enf.bending_specimen(p, dem, closed_form(p), single_leg=True)
+    return enf.bending_specimen(p, dem, closed_form(p), single_leg=True, warnings=validity(p))
 
 
 def evaluate(p: dict, h: dict, mode: str):
@@ -59,6 +64,7 @@ def evaluate(p: dict, h: dict, mode: str):
     Z0, R0 = dl.resolved_strengths(p, 2 * p["particle.radius"])
     qoi = {"Z0_used": Z0, "R0_used": R0, "peak_load": float(P[k]), "deflection_at_peak": float(delta[k]), "mode_ratio_GII_G": cf["B"]}
     qoi["initial_compliance"] = dl.initial_compliance(P, delta, k, 0.5)
+    qoi.update(dl.cohesive_zone_qoi(p, h, k, p["interface.GIIc"], R0, "II"))
     qoi["crack_growth"], ratio = dl.growth_and_dissipation(p, tip, D, np.arange(len(P)) > k, cf["Gc"])
     qoi["dissipated_energy_ratio"] = ratio
     src = (f"beam theory, Williams partition (G_II/G = {cf['B']:.3f}) with crack corrections, "
