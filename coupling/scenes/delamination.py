@@ -273,6 +273,12 @@ def strength_warnings(p: dict, d: float) -> list[str]:
     """What the cohesive-zone rule changed, said before the run (summary.json "warnings")."""
     Z0, R0 = resolved_strengths(p, d)
     out = []
+    for key, tau, gkey in (("interface.Z0", Z0, "interface.GIc"), ("interface.R0", R0, "interface.GIIc")):
+        rice = 9 * np.pi / 32 * p["material.E22"] * p[gkey] / tau**2
+        if rice < 2 * d:
+            out.append(f"{key} = {tau:.4g} Pa: its cohesive zone (Rice, {1e3 * rice:.3g} mm) spans fewer than 2 "
+                       f"bonds of d = {d:g} m, so initiation follows the strength rather than {gkey}; for the "
+                       "checks: interface.cohesive_zone_bonds >= 2, or a smaller particle.radius")
     for key, given, used in (("interface.Z0", p["interface.Z0"], Z0), ("interface.R0", p["interface.R0"], R0)):
         if used < given:
             out.append(f"{key} lowered from {given:.4g} to {used:.4g} Pa: its cohesive zone then spans "
