@@ -213,6 +213,20 @@ def test_rod_impact_bad_settings_are_caught(femdem):
     assert code == 3 and "penetrates" in s["message"], (code, err)
 
 
+@pytest.mark.slow
+@settings(max_examples=4, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(E11=st.floats(100e9, 180e9), share=st.floats(0.4, 0.55), plies=st.integers(3, 5))
+def test_panel_buckling_fem_over_its_geometry(femdem, E11, share, plies):
+    """Seed 5.2 all-FEM over the ply modulus, the delamination length (0.4 to 0.55 of the
+    span) and the sublaminate's plies: axial stiffness, local and global buckling loads against
+    their closed forms at the case's tolerances (issue #22)."""
+    code, s, err = femdem("run", "panel_buckling_coarse", "--mode", "fem", f"--set=material.E11={E11}",
+                          f"--set=geometry.delamination_length={share * 74e-3}",
+                          f"--set=geometry.sublaminate_plies={plies}")
+    assert code == 0, err
+    assert_checks(s)
+
+
 def test_panel_buckling_coarse(femdem):
     """Seed 5.2, coarse: the pre-buckling axial stiffness is E11 H b / L within 2 %; the 0_4
     film buckles at the thin-film load (its tips turning as a DCB arm's root, with shear) and
