@@ -295,3 +295,26 @@ def test_compare_reports_an_engine_that_errored_as_an_error(tmp_path, monkeypatc
     monkeypatch.setattr(compare, "execute", failing)
     assert main(["compare", "chain_consistency", "--dem", "yade,liggghts", "--out", str(tmp_path / "c")]) == 1
     assert "error" in capsys.readouterr().out
+
+
+def test_params_lists_every_key_with_its_range_and_round_trips(capsys):
+    """`femdem params CASE` prints one line per parameter (key = value  # allowed; meaning) for
+    every bundled case, and the printed values, given back as --set, resolve to the same
+    parameters (the listing is the case's, in a form the command line accepts)."""
+    import ast
+
+    from coupling.case import bundled_cases, load_case
+    from coupling.cli import main
+    for name in bundled_cases():
+        assert main(["params", name]) == 0
+        lines = capsys.readouterr().out.splitlines()
+        case = load_case(name)
+        assert len(lines) == len(case.parameters)
+        given = {}
+        for line in lines:
+            key, rest = line.split(" = ", 1)
+            value, comment = rest.split("  # ", 1)
+            assert key in case.parameters and comment
+            given[key] = str(ast.literal_eval(value))
+        assert load_case(name, given).parameters == case.parameters
+    assert main(["params", "no_such_case"]) == 2
