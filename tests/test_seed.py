@@ -177,6 +177,22 @@ def test_cfrp_beam_impact_coupled_equals_fem_when_elastic(femdem):
     assert abs(peaks["coupled"] / peaks["fem"] - 1) < 0.03, peaks
 
 
+@settings(max_examples=3, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.generate],
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(rows=st.integers(16, 24), length=st.floats(0.5, 0.9), scale=st.floats(0.5, 2.0))
+def test_cfrp_beam_impact_coupled_equals_fem_over_its_geometry(femdem, rows, length, scale):
+    """The elastic equivalence of seed 5.4 over the beam's depth (16 to 24 particle rows of
+    0.15 in), length (span 2 in shorter) and the drop load's scale: within 3 % (issue #22)."""
+    geometry = [f"--set=geometry.depth={rows * 0.15 * 0.0254}", f"--set=geometry.length={length}",
+                f"--set=geometry.span={length - 2 * 0.0254}", f"--set=load.scale={scale}"]
+    peaks = {}
+    for mode in ("fem", "coupled"):
+        code, s, err = femdem("run", "cfrp_beam_impact_coarse", "--mode", mode, *DEM[mode], *CFRP_ELASTIC, *geometry)
+        assert code == 0, err
+        peaks[mode] = s["qoi"]["peak_midspan_displacement"]
+    assert abs(peaks["coupled"] / peaks["fem"] - 1) < 0.03, peaks
+
+
 def test_rod_impact_coarse_fem_and_coupled(femdem):
     """Seed 5.3, the good setting on the paper-like mesh, all-FEM and coupled (a 3D particle
     zone under the rod: ply lattice, Hashin interface bonds, the rod on the particles; the FEM
