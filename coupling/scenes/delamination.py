@@ -43,16 +43,16 @@ from fem_region.explicit import ExplicitDynamics
 from ..params import CaseError, Param
 from .common import FEM_OPTIONS, make_region
 
-# AS4/PEEK, the delamination benchmark material of Camanho & Davila (NASA/TM-2002-211737) and
-# Turon et al. (2007), and their DCB specimen: b = 25.4 mm, h = 1.56 mm, a0 = 32.9 mm, L = 102 mm
 def ranged(default: float, doc: str, unit: str, low: float, high: float) -> Param:
     """A parameter inside the range over which the specimens are verified (tests/test_delamination_ranges.py
     samples it); a value outside is refused, not extrapolated."""
     return Param(default, doc, "float", unit, low=low, high=high)
 
 
-# The documented ranges: unidirectional glass to carbon plies and the specimen sizes of ASTM
-# D5528 / D7905 and their thick coarse variants (arms of 1 to 5 mm)
+# Defaults: AS4/PEEK, the delamination benchmark material of Camanho & Davila
+# (NASA/TM-2002-211737) and Turon et al. (2007), and their DCB specimen: b = 25.4 mm,
+# h = 1.56 mm, a0 = 32.9 mm, L = 102 mm. Ranges: unidirectional glass to carbon plies and the
+# specimen sizes of ASTM D5528 / D7905 and their thick coarse variants (arms of 1 to 5 mm)
 PARAMETERS: dict[str, Param] = {
     "material.E11": ranged(122.7e9, "ply modulus along the fibres (beam axis)", "Pa", 40e9, 200e9),
     "material.E22": ranged(10.1e9, "transverse ply modulus (through the thickness)", "Pa", 6e9, 15e9),
