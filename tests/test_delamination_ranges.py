@@ -54,14 +54,17 @@ def run_in_domain(femdem, case, sets):
     return s
 
 
-def dcb_sets(m, h, a_rel, substeps):
-    return [*material_sets(m), f"--set=geometry.arm_thickness={h}", f"--set=geometry.crack_length={a_rel * 8 * h}",
+RADIUS = st.floats(0.18e-3, 0.32e-3)  # particle radius; above h / 12 it is refused (drawn again)
+
+
+def dcb_sets(m, h, a_rel, substeps, r=0.25e-3):
+    return [*material_sets(m), f"--set=particle.radius={r}", f"--set=geometry.arm_thickness={h}", f"--set=geometry.crack_length={a_rel * 8 * h}",
             "--set=geometry.length=0.1", f"--set=clock.substeps={substeps}"]
 
 
-def bending_sets(m, h, L_rel, a_rel, substeps):
+def bending_sets(m, h, L_rel, a_rel, substeps, r=0.25e-3):
     L = L_rel * 8 * h
-    return [*material_sets(m), f"--set=geometry.arm_thickness={h}", f"--set=geometry.half_span={L}",
+    return [*material_sets(m), f"--set=particle.radius={r}", f"--set=geometry.arm_thickness={h}", f"--set=geometry.half_span={L}",
             f"--set=geometry.length={2 * L}", f"--set=geometry.crack_length={a_rel * L}",
             f"--set=clock.substeps={substeps}"]
 
@@ -75,31 +78,31 @@ THICK = st.floats(2.5e-3, 4e-3)  # the coarse variants' particles (d = 0.5 mm) n
 
 
 @COARSE
-@given(m=MATERIAL, h=THICK, a_rel=st.floats(1.0, 1.6), substeps=st.sampled_from([0, 1, 2]))
-def test_dcb_holds_over_its_ranges(femdem, m, h, a_rel, substeps):
+@given(m=MATERIAL, h=THICK, a_rel=st.floats(1.0, 1.6), substeps=st.sampled_from([0, 1, 2]), r=RADIUS)
+def test_dcb_holds_over_its_ranges(femdem, m, h, a_rel, substeps, r):
     """DCB: peak load, initial compliance and propagation branch against corrected beam theory,
     dissipation = GIc x crack area, for any sampled ply, arm and crack (a0 = 8 h to 13 h)."""
-    s = run_in_domain(femdem, "dcb_coarse", dcb_sets(m, h, a_rel, substeps))
+    s = run_in_domain(femdem, "dcb_coarse", dcb_sets(m, h, a_rel, substeps, r))
     assert_checks(s)
     assert s["qoi"]["cohesive_zone_bonds"] >= 3  # the zone the run measured is resolved
 
 
 @COARSE
 @given(m=MATERIAL, h=THICK, L_rel=st.floats(1.2, 2.0), a_rel=st.floats(0.4, 0.6),
-       substeps=st.sampled_from([0, 1, 2]))
-def test_enf_holds_over_its_ranges(femdem, m, h, L_rel, a_rel, substeps):
+       substeps=st.sampled_from([0, 1, 2]), r=RADIUS)
+def test_enf_holds_over_its_ranges(femdem, m, h, L_rel, a_rel, substeps, r):
     """ENF: the initiation load against beam theory with the Wang & Williams correction."""
-    s = run_in_domain(femdem, "enf_coarse", bending_sets(m, h, L_rel, a_rel, substeps))
+    s = run_in_domain(femdem, "enf_coarse", bending_sets(m, h, L_rel, a_rel, substeps, r))
     assert_checks(s)
 
 
 @COARSE
 @given(m=MATERIAL, h=THICK, L_rel=st.floats(1.2, 2.0), a_rel=st.floats(0.4, 0.6),
-       substeps=st.sampled_from([0, 1, 2]))
-def test_mixed_mode_holds_over_its_ranges(femdem, m, h, L_rel, a_rel, substeps):
+       substeps=st.sampled_from([0, 1, 2]), r=RADIUS)
+def test_mixed_mode_holds_over_its_ranges(femdem, m, h, L_rel, a_rel, substeps, r):
     """SLB: initiation against the B-K toughness at the beam-theory mode ratio, compliance,
     dissipation = Gc(B) x crack area."""
-    s = run_in_domain(femdem, "mixed_mode_coarse", bending_sets(m, h, L_rel, a_rel, substeps))
+    s = run_in_domain(femdem, "mixed_mode_coarse", bending_sets(m, h, L_rel, a_rel, substeps, r))
     assert_checks(s)
 
 
@@ -108,9 +111,10 @@ def test_mixed_mode_holds_over_its_ranges(femdem, m, h, L_rel, a_rel, substeps):
 @given(case=st.sampled_from(["dcb_coarse", "enf_coarse", "mixed_mode_coarse"]),
        engine=st.sampled_from(["liggghts", "lammps", "yade"]), m=MATERIAL, h=THICK,
        L_rel=st.floats(1.2, 2.5), a_rel=st.floats(0.4, 0.6), dcb_a=st.floats(1.0, 2.0),
-       substeps=st.sampled_from([0, 1, 3]))
-def test_delamination_specimens_hold_on_every_engine(femdem, case, engine, m, h, L_rel, a_rel, dcb_a, substeps):
-    sets = dcb_sets(m, h, dcb_a, substeps) if case == "dcb_coarse" else bending_sets(m, h, L_rel, a_rel, substeps)
+       substeps=st.sampled_from([0, 1, 3]), r=RADIUS)
+def test_delamination_specimens_hold_on_every_engine(femdem, case, engine, m, h, L_rel, a_rel, dcb_a, substeps, r):
+    sets = (dcb_sets(m, h, dcb_a, substeps, r) if case == "dcb_coarse"
+            else bending_sets(m, h, L_rel, a_rel, substeps, r))
     s = run_in_domain(femdem, case, [*sets, f"--dem={engine}"])
     assert_checks(s)
 
@@ -121,6 +125,7 @@ def test_delamination_specimens_hold_on_every_engine(femdem, case, engine, m, h,
     (["--set=interface.GIc=150", "--set=interface.cohesive_zone_bonds=0", "--set=interface.Z0=1.5e8"],
      "interface.GIc"),  # below Z0^2 / (2 K): linear softening cannot start
     (["--set=material.E11=30e9"], "material.E11"),  # outside the verified range
+    (["--set=particle.radius=0.3e-3"], "particle.radius"),  # coarser than h / 12 (h = 3 mm)
 ])
 def test_dcb_refuses_what_it_cannot_model(femdem, sets, key):
     code, s, err = femdem("run", "dcb_coarse", *sets)

@@ -55,6 +55,7 @@ def validity(p: dict) -> list[str]:
     """The specimen's domain: raises CaseError for what it cannot model (a crack too short for
     beam theory, a crack path that leaves the specimen, strengths linear softening cannot
     start from); returns the warnings of what it models with a compromise."""
+    dl.check_resolution(p)
     cf = closed_form(p)
     window(p, cf, final_crack_length(p, cf))
     return dl.strength_warnings(p, 2 * p["particle.radius"])

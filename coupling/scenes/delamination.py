@@ -72,7 +72,7 @@ PARAMETERS: dict[str, Param] = {
                                            "sqrt(9 pi E22 Gc / (32 N d)) are lowered to it (Turon et al. 2007); "
                                            "0 keeps the given strengths", low=0.0, high=50.0),
     "interface.friction": Param(0.0, "Coulomb friction of debonded faces in contact", low=0.0, high=1.0),
-    "particle.radius": ranged(0.13e-3, "DEM particle radius r (spacing d = 2r), below h / 4", "m", 50e-6, 0.5e-3),
+    "particle.radius": ranged(0.13e-3, "DEM particle radius r (spacing d = 2r), at most h / 12", "m", 50e-6, 0.5e-3),
     "mesh.elements_through": Param(3, "FEM elements through each arm outside the band", kind="int", low=1, high=40),
     "mesh.element_length": Param(0.0, "FEM element length along the beam; 0 = 2 d", unit="m", low=0.0),
     "load.ramp_time": Param(0.0, "time over which the load-point speed ramps up; 0 = two periods of the "
@@ -127,9 +127,7 @@ def build_specimen(p: dict, a0: float, x_a: float, x_b: float, omega_arm: float,
     r = p["particle.radius"]
     d = 2 * r
     band = d  # half-thickness of the window cut out of the FEM
-    if 1.5 * d >= 0.75 * h:
-        raise CaseError(f"particle.radius = {r:g}: the DEM band (3 d = {3 * d:g} m) must be thinner than the arms "
-                        f"(h = {h:g} m); allowed < {h / 4:g} m")
+    check_resolution(p)
     E11, E22, G13 = p["material.E11"], p["material.E22"], p["material.G13"]
     if G13 >= E22:
         raise CaseError(f"material.G13 = {G13:g}: the square lattice needs G13 < E22 = {E22:g} Pa")
@@ -227,6 +225,16 @@ def band_window(x_a: float, n_win: int, y_c: float, d: float, k: tuple[float, fl
     share[[0, -1]] = 0.5
     along = np.column_stack([np.where(c > 0, c - 1, -1), np.where(c < n_win, c + 1, -1)])
     return BandWindow(x, np.array(pairs, int), np.array(ks, float), tied, lower, upper, along, share)
+
+
+def check_resolution(p: dict) -> None:
+    """Refuses (CaseError) particles coarser than a sixth of the arm: the DEM strip then stands
+    for too much of the arm's bending (measured on a DCB with d = h / 4.2: compliance 6.2 % and
+    propagation RMS 10.9 % off; with d = h / 6, 1.5 % and 3.9 %)."""
+    r, h = p["particle.radius"], p["geometry.arm_thickness"]
+    if 2 * r > h / 6 * (1 + 1e-9):
+        raise CaseError(f"particle.radius = {r:g}: coarser than a sixth of the arm (spacing 2 r = {2 * r:g} m, "
+                        f"h = {h:g} m); allowed <= h / 12 = {h / 12:g} m")
 
 
 def resolved_strengths(p: dict, d: float) -> tuple[float, float]:

@@ -85,6 +85,7 @@ def validity(p: dict, mode: str = "II", share: float = 0.3) -> list[str]:
     if L < 8 * h:
         raise CaseError(f"geometry.half_span = {L:g}: shorter than 8 arm thicknesses (8 h = {8 * h:g} m): not a "
                         "beam; allowed >= 8 h")
+    dl.check_resolution(p)
     return dl.strength_warnings(p, 2 * p["particle.radius"]) + bending_warnings(p, mode, share)
 
 
