@@ -52,13 +52,18 @@ def propagation_load(cf: dict, delta: np.ndarray) -> np.ndarray:
 
 
 def validity(p: dict) -> list[str]:
-    """The specimen's domain: raises CaseError for what it cannot model (a crack too short for
-    beam theory, a crack path that leaves the specimen, strengths linear softening cannot
-    start from); returns the warnings of what it models with a compromise."""
+    """The specimen's domain: raises CaseError for what it cannot model (particles too coarse
+    for the arms, a crack too short for beam theory, a crack path that leaves the specimen,
+    strengths linear softening cannot start from); returns the warnings of what it models
+    with a compromise."""
+    return domain(p)[1]
+
+
+def domain(p: dict) -> tuple[tuple[float, float], list[str]]:
+    """((x_a, x_b) the DEM window in m, warnings), or CaseError: see validity."""
     dl.check_resolution(p)
     cf = closed_form(p)
-    window(p, cf, final_crack_length(p, cf))
-    return dl.strength_warnings(p, 2 * p["particle.radius"])
+    return window(p, cf, final_crack_length(p, cf)), dl.strength_warnings(p, 2 * p["particle.radius"])
 
 
 def final_crack_length(p: dict, cf: dict) -> float:
@@ -95,8 +100,7 @@ def build(p: dict, mode: str, dem: str):
     h = p["geometry.arm_thickness"]
     delta_end = p["load.final_opening_factor"] * cf["delta_peak"]
     a0 = p["geometry.crack_length"]
-    warnings = validity(p)
-    x_a, x_b = window(p, cf, final_crack_length(p, cf))
+    (x_a, x_b), warnings = domain(p)
     omega = dl.cantilever_omega(p, a0)
     spec = dl.build_specimen(p, a0, x_a, x_b, omega)
     t_load = p["load.duration_periods"] * 2 * np.pi / omega

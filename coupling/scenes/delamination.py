@@ -122,12 +122,12 @@ def slice_ply(p: dict) -> np.ndarray:
 def build_specimen(p: dict, a0: float, x_a: float, x_b: float, omega_arm: float,
                    stations: tuple[float, ...] = ()) -> Specimen:
     """Mesh, DEM window [x_a, x_b] (rounded to whole spacings), law bonds debonded for x < a0;
-    ``stations`` (m): x of supports and load lines, which get a line of mesh nodes."""
+    ``stations`` (m): x of supports and load lines, which get a line of mesh nodes. The
+    particle size is the caller's to check (check_resolution, in each specimen's validity)."""
     h, L = p["geometry.arm_thickness"], p["geometry.length"]
     r = p["particle.radius"]
     d = 2 * r
     band = d  # half-thickness of the window cut out of the FEM
-    check_resolution(p)
     E11, E22, G13 = p["material.E11"], p["material.E22"], p["material.G13"]
     if G13 >= E22:
         raise CaseError(f"material.G13 = {G13:g}: the square lattice needs G13 < E22 = {E22:g} Pa")
