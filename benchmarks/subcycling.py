@@ -1,5 +1,5 @@
 """Subcycling: wall time and accuracy against the substep count, with and without the
-interface band's elements among the fast forces (coupling/coupled.py), side by side.
+interface band's elements among the fast forces (coupling/participants/clock.py), side by side.
 
 Usage: .venv/bin/python benchmarks/subcycling.py [--case panel_buckling_coarse]
            [--set clock.t_end=3e-3 ...] [--substeps 1 2 3] [--dem liggghts] [--out DIR]
@@ -31,7 +31,7 @@ def main() -> int:
     ap.add_argument("--out", default=None)
     a = ap.parse_args()
     from coupling.case import load_case
-    from coupling.coupled import CoupledClock
+    from coupling.participants.clock import CoupledClock
     from coupling.params import parse_set
     from coupling.run import execute
     out = Path(a.out or tempfile.mkdtemp(prefix="femdem-subcycling-"))

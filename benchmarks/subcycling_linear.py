@@ -7,7 +7,7 @@ Builds the case's coupled model (not run), then iterates the linearised coupled 
 FEM's assembled stiffness K, the DEM bonds and the coupling layer's law bonds as springs
 (normal kn, shear ks along each bond's reference direction, law bonds isotropic K x area),
 slaved interface particles x_p = W x_nodes, in the clock's order (fast forces, slow kick at
-the window's first substep, fast kick, drift; coupling/coupled.py). From a random state it
+the window's first substep, fast kick, drift; coupling/participants/clock.py). From a random state it
 reports the growth of the energy over --steps FEM steps (the largest value in the last tenth
 over the largest in the first tenth): about 1 is stable, growth is the impulse resonance.
 --scales multiplies the DEM stiffnesses (a softened, damaged zone moves its spectrum). No
@@ -29,7 +29,7 @@ sys.path.insert(0, str(ROOT))
 
 def build(case: str, sets: list[str], dem: str):
     """(simulation, CoupledClock) of a case in coupled mode (the clock taken as it is made)."""
-    import coupling.coupled as cc
+    import coupling.participants.clock as cc
     from coupling.case import load_case
     from coupling.params import parse_set
     made = {}
@@ -78,7 +78,7 @@ def operators(clock) -> dict:
 
 def band_split(ops: dict, band: bool):
     """(K_fast, K_slow): the band's element stiffness and the rest (K_fast = 0 without band)."""
-    from coupling.coupled import interface_band
+    from coupling.participants.clock import interface_band
     region = ops["region"]
     e = interface_band(region, ops["itf"].W) if band else np.zeros(0, int)
     ed, ke = region._edofs[e], region.ke[e]  # noqa: SLF001 (the assembled element data)

@@ -1,9 +1,12 @@
 """The shared explicit clock: an ordered list of named stages run by a trivial timed loop.
 
 A scene assembles a :class:`Simulation` from its participants; one clock step calls every
-stage once in order (FEM kick-drift, interface map, DEM step, interface map back, FEM
-forces, FEM kick), so per-stage timing comes for free and the ordering is visible in one
-place. Instability guards run at every history sample.
+stage once in order, so per-stage timing comes for free and the ordering is visible in one
+place. A FEM run: fem.kick_drift, fem.forces, fem.kick. A coupled run: the engine's step,
+m times per FEM step, each running inside its hook laws, interface.read, fem.forces (the
+FEM's own forces every m-th), fem.kick_drift, interface.write (participants/clock.py).
+summary.json "stages" lists them in this order with their wall times. Instability guards
+run at every history sample.
 """
 from __future__ import annotations
 
@@ -25,11 +28,36 @@ class Instability(RuntimeError):
 
 @dataclass
 class Stage:
-    """One named phase of a clock step; ``timer`` is the summary.json timing bucket."""
+    """One named phase of a clock step; ``timer``: its summary.json timing bucket;
+    ``substages``: the stages its participant runs inside it, in order (an engine's hook runs
+    them between its force evaluation and its move); ``seconds``: wall time so far (its
+    substages' included)."""
 
     name: str
     timer: str
     run: Callable[[], None]
+    substages: list["Stage"] = field(default_factory=list)
+    seconds: float = 0.0
+
+
+def run_stages(stages: list[Stage]) -> None:
+    """Run ``stages`` in order, each timed."""
+    clock = time.perf_counter
+    for stage in stages:
+        t0 = clock()
+        stage.run()
+        stage.seconds += clock() - t0
+
+
+def stage_timing(stages: list[Stage], within: str = "") -> list[dict]:
+    """[{name, timer, s, within}] of ``stages`` and their substages in running order; a
+    stage's ``s`` excludes its substages (the engine's own time, for an engine step)."""
+    rows = []
+    for st in stages:
+        own = st.seconds - sum(sub.seconds for sub in st.substages)
+        rows.append({"name": st.name, "timer": st.timer, "s": own, **({"within": within} if within else {})})
+        rows += stage_timing(st.substages, st.name)
+    return rows
 
 
 @dataclass
@@ -175,10 +203,7 @@ def run_clock(sim: Simulation, on_sample: Callable[[int, float], None] | None = 
         if frame_every and on_frame and resume_from is None:  # a resume keeps the frames before its checkpoint
             frame(step)
         for step in range(first, sim.n_steps + 1):
-            for stage in sim.stages:
-                t0 = clock()
-                stage.run()
-                timing[stage.timer] += clock() - t0
+            run_stages(sim.stages)
             if step % sim.history_every == 0 or step == sim.n_steps:
                 sample(step)
             if frame_every and on_frame and step % frame_every == 0:
@@ -186,21 +211,27 @@ def run_clock(sim: Simulation, on_sample: Callable[[int, float], None] | None = 
             if can_save and step % checkpoint_every == 0 and step < sim.n_steps:
                 save(step)
     except Instability as exc:
-        exc.partial = _result(hist, _corrected(timing, sim), sim.energies(), step, taken)  # type: ignore[attr-defined]
+        exc.partial = _result(hist, _corrected(timing, sim), sim.energies(), step, taken, sim)  # type: ignore[attr-defined]
         raise
-    return _result(hist, _corrected(timing, sim), sim.energies(), sim.n_steps, taken)
+    return _result(hist, _corrected(timing, sim), sim.energies(), sim.n_steps, taken, sim)
 
 
 def _corrected(timing: dict, sim: Simulation) -> dict:
+    """The timing buckets: each stage's own time in its timer's bucket, then the participants'
+    corrections (a worker's transport, measured inside the engine's step)."""
+    timing = dict(timing)
+    for row in stage_timing(sim.stages):
+        timing[row["timer"]] += row["s"]
     if sim.timing_correction:
         for k, v in sim.timing_correction().items():
             timing[k] += v
     return timing
 
 
-def _result(hist, timing, energy, steps, snapshots=None) -> dict:
+def _result(hist, timing, energy, steps, snapshots, sim) -> dict:
     history = {k: np.asarray(v) for k, v in hist.items()}
     history.update(snapshots or {})
     err = history["balance_error_rel"]
     energy = dict(energy, balance_error_rel=float(err[-1]) if err.size else 0.0)
-    return {"history": history, "timing_s": timing, "energy": energy, "steps": steps}
+    return {"history": history, "timing_s": timing, "energy": energy, "steps": steps,
+            "stages": stage_timing(sim.stages)}

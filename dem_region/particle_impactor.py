@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from fem_region.impactor import RigidImpactor
+from physics.impactor import RigidImpactor
 
 
 class ParticleImpactor:

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize
 
-from .laws import HashinCohesiveLaw, PlyBondLaw
+from physics.laws import HashinCohesiveLaw, PlyBondLaw
 from .ply_lattice import PlyMaterial
 from .scene import DemScene, check_fits
 

@@ -21,9 +21,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fem_region.failure import HoffmanStrengths
+from physics.failure import HoffmanStrengths
 
-from .laws import HashinCohesiveLaw, PlyBondLaw
+from physics.laws import HashinCohesiveLaw, PlyBondLaw
 from .scene import check_fits
 
 

@@ -14,7 +14,7 @@ from typing import Callable
 import numpy as np
 
 from .bulk_viscosity import BulkViscosity
-from .impactor import RigidImpactor
+from physics.impactor import RigidImpactor
 from .region import FemRegion
 
 TimeFunction = Callable[[float], float]

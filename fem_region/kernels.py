@@ -124,51 +124,6 @@ def _tl_force(u, conn, dN, dx, D, voigt, out, dim, nloc, ns):
 
 
 @njit(cache=True)
-def ball_contact(x, v, centre, velocity, radius, penalty, friction, slip2, f):
-    """Penalty contact of a rigid ball (a disc in 2D) with points x (m, dim) m moving at v
-    (m, dim) m/s: normal force penalty x penetration along the outward normal, Coulomb friction
-    against the tangential slip regularised by slip2 (m/s)^2 (RigidImpactor.forces for the
-    ball, each point once: the numpy form's digits). f (m, dim) N out; returns the sum of the
-    squared penetrations m^2."""
-    m, dim = x.shape
-    pen2 = 0.0
-    d, vt, still = np.empty(dim), np.empty(dim), np.zeros(dim)  # normal, tangential slip rate
-    for p in range(m):
-        r2 = 0.0
-        for i in range(dim):
-            d[i] = x[p, i] - centre[i]
-            r2 += d[i] * d[i]
-        r = np.sqrt(r2)
-        rr = max(r, 1e-300)
-        pen = max(radius - r, 0.0)
-        fn = penalty * pen
-        for i in range(dim):
-            d[i] = d[i] / rr  # the normal
-            f[p, i] = fn * d[i]
-        if friction > 0:
-            vn = _einsum_dot(v[p], velocity, d)
-            for i in range(dim):
-                vt[i] = (v[p, i] - velocity[i]) - vn * d[i]
-            c = friction * fn / np.sqrt(_einsum_dot(vt, still, vt) + slip2)
-            for i in range(dim):
-                f[p, i] -= c * vt[i]
-        pen2 += pen * pen
-    return pen2
-
-
-@njit(cache=True)
-def _einsum_dot(a, a0, b):
-    """sum_i (a_i - a0_i) b_i in the order numpy's einsum adds three terms, (0 + 2) + 1 (its
-    digits, not only its value)."""
-    if a.shape[0] == 3:
-        return ((a[0] - a0[0]) * b[0] + (a[2] - a0[2]) * b[2]) + (a[1] - a0[1]) * b[1]
-    acc = 0.0
-    for i in range(a.shape[0]):
-        acc += (a[i] - a0[i]) * b[i]
-    return acc
-
-
-@njit(cache=True)
 def respa_kicks(v, a, f_tie, band, m, dt, dt_fast, slow, kick, f_fast, a_slow):
     """The FEM's kicks of one DEM step of the impulse (r-RESPA) clock, in one pass:
     f_fast = f_tie - band; at a FEM step (``slow``) a_slow = a - (f_fast - f_tie) / m and

@@ -1,6 +1,6 @@
 """Tie schemes across the transition interface: how interface particles follow the FEM.
 
-A tie has three duties inside the coupled step (coupling/coupled.py calls them at every DEM
+A tie has three duties inside the coupled step (coupling/participants/clock.py calls them at every DEM
 step, after the engine computed its forces and before it moves): ``fast_force`` returns the
 nodal force (n_nodes, dim) N the DEM exerts on the FEM through the tie at this instant;
 ``follow`` runs after the FEM drift and tells the engine how the interface particles move

@@ -7,7 +7,7 @@ from fem_region import loads, materials, mesh
 from fem_region.bulk_viscosity import BulkViscosity
 from fem_region.elements import ELEMENTS
 from fem_region.explicit import ExplicitDynamics, NodalLoad, PrescribedMotion
-from fem_region.impactor import RigidImpactor
+from physics.impactor import RigidImpactor
 from fem_region.region import FemRegion
 
 

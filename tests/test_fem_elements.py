@@ -158,7 +158,7 @@ def test_hourglass_control_passes_patch_test(name, form):
 
 
 def test_failure_indices_closed_forms():
-    from fem_region import failure
+    from physics import failure
     k = failure.HoffmanStrengths(2000e6, 1200e6, 50e6, 200e6, 50e6, 200e6, 60e6, 80e6, 80e6)
     for comp, strengths in ((0, (k.Xt, -k.Xc)), (1, (k.Yt, -k.Yc)), (2, (k.Zt, -k.Zc))):
         for s in strengths:

@@ -77,7 +77,7 @@ def test_high_velocity_impact_with_a_soft_penalty_stops_with_the_remedy(femdem):
 def test_hourglass_guard_names_the_cause():
     """An hourglass pattern imposed on a one-point Q4 mesh is reported as hourglassing."""
     import numpy as np
-    from coupling.scenes.common import fem_guards
+    from coupling.participants.fem import fem_guards
     from fem_region import materials, mesh
     from fem_region.elements import ELEMENTS
     from fem_region.explicit import ExplicitDynamics

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 from hypothesis import example, given, settings, strategies as st
 
-from dem_region.law_bonds import LawBonds
-from dem_region.laws import HashinCohesiveLaw
+from physics.law_bonds import LawBonds
+from physics.laws import HashinCohesiveLaw
 
 AS4 = HashinCohesiveLaw(K=1e14, Z0=80e6, R0=100e6, GIc=969.0, GIIc=1719.0, eta=2.284)
 
@@ -66,8 +66,8 @@ def _family(name: str):
     if name == "central_hashin":  # node pairs (rod_impact's FEM layers): raw relative translation
         return LawBonds(pairs, X, [[0.0, 1.0, 0.0]] * n, h * h, AS4, friction=0.3), X, True
     if name == "corotated_ply":
-        from dem_region.laws import PlyBondLaw
-        from fem_region.failure import HoffmanStrengths
+        from physics.laws import PlyBondLaw
+        from physics.failure import HoffmanStrengths
         X = np.array([[i * h, j * h, 0.0] for i in range(4) for j in range(4)])
         pairs = np.array([(a, b) for a in range(16) for b in range(a + 1, 16) if np.linalg.norm(X[a] - X[b]) < 1.5 * h])
         law = PlyBondLaw(np.full(len(pairs), 1e14), [[100.0, 50.0]], HoffmanStrengths(*([60e6] * 9)), np.eye(3))
@@ -132,7 +132,7 @@ def test_the_copy_path_is_the_array_path():
 
 def test_large_families_run_in_parallel_to_the_same_bits():
     """Above PARALLEL_BONDS the parallel build runs; its forces equal the serial build's."""
-    from dem_region import law_kernels
+    from physics import law_kernels
     bonds0, X, _ = _family("ply_3d")
     x = X + np.random.default_rng(1).normal(size=X.shape) * 3e-6
     out = []
@@ -155,7 +155,7 @@ def test_compiled_ball_contact_is_the_gap_form(seed, dim, friction):
     """RigidImpactor.forces of a ball (compiled) = the readable gap form: penalty x penetration
     along the normal, Coulomb friction against the regularised tangential slip, to the bit;
     stored energy to round-off."""
-    from fem_region.impactor import RigidImpactor
+    from physics.impactor import RigidImpactor
     rng = np.random.default_rng(seed)
     imp = RigidImpactor("sphere", rng.normal(size=dim) * 0.1, 1.0, 1.0, rng.normal(size=dim), 1e6,
                         friction=friction)

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-from dem_region.laws import HashinCohesiveLaw, friction_traction
+from physics.laws import HashinCohesiveLaw, friction_traction
 
 # AS4/PEEK (VALIDATION.md: Camanho & Davila / Turon), penalty 1e14 Pa/m
 AS4 = HashinCohesiveLaw(K=1e14, Z0=80e6, R0=100e6, GIc=969.0, GIIc=1719.0, eta=2.284)
@@ -114,7 +114,7 @@ def test_law_bonds_measure_toughness_and_conserve_momentum(angle):
     """Two particles pulled apart along a fixed direction to full decohesion: the bond forces
     are equal and opposite at every step, and the measured dissipation (work of the bond
     forces minus stored energy) equals Gc(B) x area, B from the separation's mode mix."""
-    from dem_region.law_bonds import LawBonds
+    from physics.law_bonds import LawBonds
     X = np.array([[0.0, 0.0, 0.0], [0.0, 1e-3, 0.0]])
     area = 2.5e-7
     bonds = LawBonds([[0, 1]], X, [[0.0, 1.0, 0.0]], area, AS4)
@@ -133,8 +133,8 @@ def test_law_bonds_measure_toughness_and_conserve_momentum(angle):
 
 def test_compiled_bond_kernels_match_numpy():
     """Scatter, Love-Weber bond stress and the Hoffman index: compiled loops = numpy forms."""
-    from dem_region import kernels
-    from fem_region.failure import HoffmanStrengths, hoffman, to_ply_axes
+    from physics import kernels
+    from physics.failure import HoffmanStrengths, hoffman, to_ply_axes
     rng = np.random.default_rng(3)
     n, nb = 12, 40
     loc = np.array([rng.choice(n, 2, replace=False) for _ in range(nb)])
@@ -164,7 +164,7 @@ def test_compiled_bond_kernels_match_numpy():
 def test_failed_bonds_in_compression_slide_with_friction():
     """A fully failed bond pressed shut and sheared: normal penalty, Coulomb friction mu |t_n|
     against the slip rate, momentum exact."""
-    from dem_region.law_bonds import LawBonds
+    from physics.law_bonds import LawBonds
     X = np.array([[0.0, 0.0, 0.0], [0.0, 1e-3, 0.0], [1e-3, 0.0, 0.0], [1e-3, 1e-3, 0.0]])
     bonds = LawBonds([[0, 1], [2, 3]], X, [[0.0, 1.0, 0.0]] * 2, 1e-6, AS4, friction=0.4)
     bonds.damage[:] = 1.0
@@ -183,7 +183,7 @@ def test_failed_bonds_in_compression_slide_with_friction():
 
 def _interface_row(n=6, h=1e-3):
     """n vertical pairs along x (spacing h), joined by an interface LawBonds with neighbours."""
-    from dem_region.law_bonds import LawBonds
+    from physics.law_bonds import LawBonds
     X = np.array([[c * h, y, 0.0] for c in range(n) for y in (0.0, h)])
     pairs = np.arange(2 * n).reshape(n, 2)
     k = np.arange(n)
@@ -214,7 +214,7 @@ def test_interface_forces_balance_forces_and_moments(seed):
     """Any small deformation: the interface's forces sum to zero and their net moment is of
     second order (small-rotation kinematics), where a shear spring on the raw relative
     translation leaves a first-order moment (it resists rotation)."""
-    from dem_region.law_bonds import LawBonds
+    from physics.law_bonds import LawBonds
     X, bonds = _interface_row()
     x = X + np.random.default_rng(seed).normal(size=X.shape) * [1e-7, 1e-7, 0.0]
     raw = LawBonds(bonds.pairs, X, bonds.normal, 1e-6, AS4)
@@ -235,9 +235,9 @@ def _rotation(theta):
 def _central_lattice():
     """A 3 x 3 particle square with axial and diagonal central PlyBondLaw bonds (strong enough
     to stay elastic)."""
-    from dem_region.law_bonds import LawBonds
-    from dem_region.laws import PlyBondLaw
-    from fem_region.failure import HoffmanStrengths
+    from physics.law_bonds import LawBonds
+    from physics.laws import PlyBondLaw
+    from physics.failure import HoffmanStrengths
     h = 1e-3
     X = np.array([[i * h, j * h, 0.0] for i in range(3) for j in range(3)])
     pairs = [(a, b) for a in range(9) for b in range(a + 1, 9) if np.linalg.norm(X[a] - X[b]) < 1.5 * h]
@@ -254,7 +254,7 @@ def test_finite_rotation_bonds_are_free_of_rigid_motion_and_conservative(which):
     where the fixed-normal split of the same interface pushes with K A h theta^2 / 2; on a
     deformed and turned configuration the forces are minus the gradient of the bonds' stored
     energy (central differences), sum to zero and have no net moment."""
-    from dem_region.law_bonds import LawBonds
+    from physics.law_bonds import LawBonds
     if which == "interface":
         X, small = _interface_row()
         bonds = LawBonds(small.pairs, X, small.normal, small.area, AS4, along=small.along, finite_rotation=True)
@@ -292,7 +292,7 @@ def test_finite_rotation_bonds_are_free_of_rigid_motion_and_conservative(which):
 def test_finite_rotation_matches_small_rotation_when_small():
     """Under a small deformation and a 1e-4 rotation the corotated interface tractions equal
     the small-rotation slip's (to the second order they neglect)."""
-    from dem_region.law_bonds import LawBonds
+    from physics.law_bonds import LawBonds
     X, small = _interface_row()
     big = LawBonds(small.pairs, X, small.normal, small.area, AS4, along=small.along, finite_rotation=True)
     x = (X + np.random.default_rng(1).normal(size=X.shape) * [1e-7, 1e-7, 0.0]) @ _rotation(1e-4).T
@@ -302,7 +302,7 @@ def test_finite_rotation_matches_small_rotation_when_small():
 
 
 def test_finite_rotation_is_refused_where_it_is_not_built():
-    from dem_region.law_bonds import LawBonds
+    from physics.law_bonds import LawBonds
     X = np.array([[0.0, 0.0, 0.0], [0.0, 1e-3, 0.0]])
     with pytest.raises(ValueError, match="central law"):
         LawBonds([[0, 1]], X, [[0.0, 1.0, 0.0]], 1e-6, AS4, finite_rotation=True)

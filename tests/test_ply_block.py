@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from dem_region import ply_block
-from dem_region.law_bonds import LawBonds
+from physics.law_bonds import LawBonds
 from dem_region.ply_lattice import PlyMaterial
-from fem_region.failure import HoffmanStrengths
+from physics.failure import HoffmanStrengths
 
 S = HoffmanStrengths(Xt=1.5e9, Xc=1.2e9, Yt=50e6, Yc=200e6, Zt=50e6, Zc=200e6, S23=60e6, S13=75e6, S12=75e6)
 PLY = PlyMaterial(152.4e9, 10.3e9, 4.226e9, 3.7e9, 1550.0, S, 40e3, 300.0)

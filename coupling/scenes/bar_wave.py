@@ -12,7 +12,7 @@ from fem_region.explicit import ExplicitDynamics, PrescribedMotion
 
 from ..checks import check
 from ..params import Param, isotropic_material, positive
-from .common import FEM_OPTIONS, fem_only, make_region
+from ..participants.fem import FEM_OPTIONS, fem_only, make_region
 
 NAME = "bar_wave"
 DESCRIPTION = "velocity pulse in a free bar; wave speed against sqrt(E/rho)"

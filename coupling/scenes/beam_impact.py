@@ -37,18 +37,18 @@ from __future__ import annotations
 import numpy as np
 
 from dem_region import ply_lattice
-from dem_region.law_bonds import LawBonds
+from physics.law_bonds import LawBonds
 from dem_region.particle_impactor import ParticleImpactor
 from fem_region import materials, mesh
 from fem_region.explicit import ExplicitDynamics, PrescribedMotion
-from fem_region.impactor import RigidImpactor
+from physics.impactor import RigidImpactor
 
 from ..checks import check, energy_balance
 from ..params import CaseError, Param, density, modulus, positive
-from .common import FEM_OPTIONS, fem_guards, fem_only, make_region, n_steps, time_step
-from .coupled_common import COUPLING, coupled_simulation
+from ..participants.fem import FEM_OPTIONS, fem_only, make_region
+from ..participants.coupled import COUPLING, coupled_simulation
 from .ply_fracture import PLY, ply_material
-from .standalone import dem_only
+from ..participants.dem import dem_only
 
 NAME = "beam_impact"
 DESCRIPTION = "seed 5.1: clamped [0_6/90_4/0_6] beam, rigid cylinder impact, delamination + matrix cracks"

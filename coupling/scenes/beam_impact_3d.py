@@ -30,19 +30,20 @@ from __future__ import annotations
 import numpy as np
 
 from dem_region import ply_block
-from dem_region.law_bonds import LawBonds
+from physics.law_bonds import LawBonds
 from dem_region.particle_impactor import ParticleImpactor
 from fem_region import materials, mesh
 from fem_region.explicit import ExplicitDynamics, PrescribedMotion
-from fem_region.impactor import RigidImpactor
+from physics.impactor import RigidImpactor
 
 from ..params import CaseError, Param, positive
 from . import beam_impact
 from .beam_impact import blocks, thickness
-from .common import fem_only, hold_symmetry_planes, make_region
-from .coupled_common import coupled_simulation
+from ..participants.dem import hold_symmetry_planes
+from ..participants.fem import fem_only, make_region
+from ..participants.coupled import coupled_simulation
 from .ply_fracture import ply_material
-from .standalone import dem_only
+from ..participants.dem import dem_only
 
 NAME = "beam_impact_3d"
 DESCRIPTION = "seed 5.1 in 3D: a quarter of the clamped beam, free edges, cylinder impact"

@@ -12,11 +12,11 @@ import numpy as np
 
 from fem_region import materials, mesh
 from fem_region.explicit import ExplicitDynamics
-from fem_region.impactor import RigidImpactor
+from physics.impactor import RigidImpactor
 
 from ..checks import bound
 from ..params import Param, isotropic_material, positive
-from .common import FEM_OPTIONS, fem_only, make_region
+from ..participants.fem import FEM_OPTIONS, fem_only, make_region
 
 NAME = "block_impact"
 DESCRIPTION = "FEM: rigid cylinder on a free block, momentum conserved; penetration guard"

@@ -15,7 +15,7 @@ from fem_region.modal import lowest_modes
 
 from ..checks import check
 from ..params import Param, density, modulus, positive
-from .common import FEM_OPTIONS, fem_only, make_region
+from ..participants.fem import FEM_OPTIONS, fem_only, make_region
 
 NAME = "cantilever"
 DESCRIPTION = "FEM: orthotropic cantilever, tip load, dynamic relaxation vs Timoshenko"

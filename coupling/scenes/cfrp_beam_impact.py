@@ -52,19 +52,19 @@ from __future__ import annotations
 import numpy as np
 
 from dem_region import ply_lattice
-from dem_region.law_bonds import LawBonds
-from dem_region.laws import HashinCohesiveLaw, PlyBondLaw
+from physics.law_bonds import LawBonds
+from physics.laws import HashinCohesiveLaw, PlyBondLaw
 from dem_region.particle_load import ParticleLoad
 from dem_region.scene import DemScene
 from fem_region import loads, materials, mesh
 from fem_region.explicit import ExplicitDynamics, PrescribedMotion
-from fem_region.failure import HoffmanStrengths
+from physics.failure import HoffmanStrengths
 
 from ..checks import check, energy_balance, within
 from ..params import CaseError, Param, density, modulus, positive
-from .common import FEM_OPTIONS, fem_only, make_region
-from .coupled_common import COUPLING, coupled_simulation
-from .standalone import dem_only
+from ..participants.fem import FEM_OPTIONS, fem_only, make_region
+from ..participants.coupled import COUPLING, coupled_simulation
+from ..participants.dem import dem_only
 
 NAME = "cfrp_beam_impact"
 DESCRIPTION = "seed 5.4: concrete beam with a CFRP sheet, drop load; flexural cracking and debonding"

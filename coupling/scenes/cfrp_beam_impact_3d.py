@@ -25,20 +25,21 @@ from __future__ import annotations
 import numpy as np
 
 from dem_region import ply_block, ply_lattice
-from dem_region.law_bonds import LawBonds
-from dem_region.laws import HashinCohesiveLaw, PlyBondLaw
+from physics.law_bonds import LawBonds
+from physics.laws import HashinCohesiveLaw, PlyBondLaw
 from dem_region.particle_load import ParticleLoad
 from dem_region.scene import DemScene
 from fem_region import loads, materials, mesh
 from fem_region.explicit import ExplicitDynamics, PrescribedMotion
-from fem_region.failure import HoffmanStrengths
+from physics.failure import HoffmanStrengths
 
 from ..params import CaseError, Param
 from . import cfrp_beam_impact as cfrp
 from .cfrp_beam_impact import T_END, drop_load, geometry_check, rows
-from .common import fem_only, hold_symmetry_planes, make_region
-from .coupled_common import coupled_simulation
-from .standalone import dem_only
+from ..participants.dem import hold_symmetry_planes
+from ..participants.fem import fem_only, make_region
+from ..participants.coupled import coupled_simulation
+from ..participants.dem import dem_only
 
 NAME = "cfrp_beam_impact_3d"
 DESCRIPTION = "seed 5.4 in 3D: a quarter of the concrete beam with its CFRP sheet, drop load"

@@ -18,9 +18,9 @@ from fem_region.explicit import ExplicitDynamics, PrescribedMotion
 
 from ..checks import bound
 from ..params import isotropic_material, Param, particle_radius, positive
-from .common import fem_only, make_region
-from .coupled_common import COUPLING, coupled_simulation
-from .standalone import dem_only
+from ..participants.fem import fem_only, make_region
+from ..participants.coupled import COUPLING, coupled_simulation
+from ..participants.dem import dem_only
 
 NAME = "chain_consistency"
 DESCRIPTION = "coupled: FEM bar + DEM chain vs the monolithic chain, to round-off"

@@ -23,7 +23,7 @@ from dem_region.scene import DemScene
 
 from ..checks import check
 from ..params import density, modulus, Param, particle_radius, positive
-from .standalone import dem_only
+from ..participants.dem import dem_only
 
 COMMON = {
     "material.E": modulus(48e9, "Young's modulus"),

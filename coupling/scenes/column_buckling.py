@@ -21,7 +21,7 @@ from fem_region.modal import lowest_modes
 
 from ..checks import check
 from ..params import Param, isotropic_material, positive
-from .common import FEM_OPTIONS, fem_only, make_region
+from ..participants.fem import FEM_OPTIONS, fem_only, make_region
 
 NAME = "column_buckling"
 DESCRIPTION = "FEM (TL): clamped-clamped column, buckling load vs 4 pi^2 E I / L^2"

@@ -14,8 +14,8 @@ from fem_region.explicit import ExplicitDynamics
 
 from ..checks import bound
 from ..params import isotropic_material, Param, particle_radius, positive
-from .common import make_region
-from .coupled_common import COUPLING, coupled_simulation
+from ..participants.fem import make_region
+from ..participants.coupled import COUPLING, coupled_simulation
 
 NAME = "coupled_free_flight"
 DESCRIPTION = "coupled: free FEM block + bonded lattice, momentum conserved to 1e-12"

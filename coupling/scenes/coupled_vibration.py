@@ -17,8 +17,8 @@ from fem_region.explicit import ExplicitDynamics, PrescribedMotion
 
 from ..checks import bound
 from ..params import isotropic_material, Param, particle_radius, positive
-from .common import make_region
-from .coupled_common import COUPLING, coupled_simulation
+from ..participants.fem import make_region
+from ..participants.coupled import COUPLING, coupled_simulation
 
 NAME = "coupled_vibration"
 DESCRIPTION = "coupled: undamped FEM + lattice cantilever, energy drift over 10^5 steps"

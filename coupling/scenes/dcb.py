@@ -19,7 +19,7 @@ import numpy as np
 from ..checks import bound, check
 from ..params import CaseError, Param
 from . import delamination as dl
-from .coupled_common import COUPLING, coupled_simulation
+from ..participants.coupled import COUPLING, coupled_simulation
 
 NAME = "dcb"
 DESCRIPTION = "coupled: DCB mode I delamination, load-opening vs corrected beam theory"

@@ -34,14 +34,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dem_region.law_bonds import LawBonds
-from dem_region.laws import MIXED_MODE, HashinCohesiveLaw
+from physics.law_bonds import LawBonds
+from physics.laws import MIXED_MODE, HashinCohesiveLaw
 from dem_region.scene import DemScene
 from fem_region import materials, mesh
 from fem_region.explicit import ExplicitDynamics
 
 from ..params import CaseError, Param
-from .common import FEM_OPTIONS, make_region
+from ..participants.fem import FEM_OPTIONS, make_region
 
 def ranged(default: float, doc: str, unit: str, low: float, high: float) -> Param:
     """A parameter inside the range over which the specimens are verified (tests/test_delamination_ranges.py

@@ -27,7 +27,7 @@ from fem_region.explicit import PrescribedMotion
 from ..checks import check
 from ..params import CaseError, Param
 from . import delamination as dl
-from .coupled_common import COUPLING, coupled_simulation
+from ..participants.coupled import COUPLING, coupled_simulation
 
 NAME = "enf"
 DESCRIPTION = "coupled: ENF mode II delamination, peak load vs beam theory"

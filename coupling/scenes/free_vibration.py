@@ -13,7 +13,7 @@ from fem_region.modal import lowest_modes
 
 from ..checks import bound
 from ..params import Param, isotropic_material, positive
-from .common import FEM_OPTIONS, fem_only, make_region
+from ..participants.fem import FEM_OPTIONS, fem_only, make_region
 
 NAME = "free_vibration"
 DESCRIPTION = "FEM: undamped clamped beam in its first mode, energy drift over 10^4 steps"

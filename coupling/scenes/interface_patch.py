@@ -26,8 +26,8 @@ from fem_region.explicit import ExplicitDynamics
 
 from ..checks import bound
 from ..params import isotropic_material, Param, particle_radius
-from .common import make_region
-from .coupled_common import COUPLING, coupled_simulation
+from ..participants.fem import make_region
+from ..participants.coupled import COUPLING, coupled_simulation
 
 NAME = "interface_patch"
 DESCRIPTION = "coupled: uniform strain across the interface, no spurious interface force"

@@ -21,8 +21,8 @@ from fem_region.loads import sine_squared
 
 from ..checks import bound
 from ..params import isotropic_material, Param, particle_radius, positive
-from .common import make_region
-from .coupled_common import COUPLING, coupled_simulation
+from ..participants.fem import make_region
+from ..participants.coupled import COUPLING, coupled_simulation
 
 NAME = "interface_wave"
 DESCRIPTION = "coupled: pulse FEM -> DEM -> FEM, reflected < 2 %, transmitted > 95 %"

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from dem_region.laws import HashinCohesiveLaw
+from physics.laws import HashinCohesiveLaw
 
 from ..checks import check
 from . import delamination as dl

@@ -62,8 +62,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from dem_region.law_bonds import LawBonds
-from dem_region.laws import HashinCohesiveLaw
+from physics.law_bonds import LawBonds
+from physics.laws import HashinCohesiveLaw
 from fem_region import materials, mesh
 from fem_region.explicit import ExplicitDynamics, PrescribedMotion
 from fem_region.modal import lowest_modes
@@ -71,8 +71,8 @@ from fem_region.modal import lowest_modes
 from ..checks import bound, check, within
 from ..params import density, modulus, Param, particle_radius, positive
 from . import delamination as dl
-from .common import FEM_OPTIONS, FemNodes, fem_only, make_region
-from .coupled_common import COUPLING, coupled_simulation
+from ..participants.fem import FEM_OPTIONS, FemNodes, fem_only, make_region
+from ..participants.coupled import COUPLING, coupled_simulation
 
 NAME = "panel_buckling"
 DESCRIPTION = "seed 5.2: delaminated [0_20] panel, local and global buckling loads vs closed forms"

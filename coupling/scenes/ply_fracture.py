@@ -22,13 +22,13 @@ from __future__ import annotations
 import numpy as np
 
 from dem_region import ply_lattice
-from dem_region.law_bonds import LawBonds
+from physics.law_bonds import LawBonds
 from dem_region.scene import DemScene
-from fem_region.failure import HoffmanStrengths
+from physics.failure import HoffmanStrengths
 
 from ..checks import check
 from ..params import density, modulus, Param, particle_radius, positive
-from .standalone import dem_only
+from ..participants.dem import dem_only
 
 NAME = "ply_fracture"
 DESCRIPTION = "DEM: ply strip to failure, Hoffman strength and Gf x area, size independent"

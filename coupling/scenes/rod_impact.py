@@ -66,21 +66,22 @@ import numpy as np
 import skfem
 
 from dem_region import ply_block
-from dem_region.law_bonds import LawBonds
-from dem_region.laws import HashinCohesiveLaw
+from physics.law_bonds import LawBonds
+from physics.laws import HashinCohesiveLaw
 from dem_region.particle_impactor import ParticleImpactor
 from dem_region.ply_lattice import PlyMaterial
-from fem_region.failure import HoffmanStrengths
+from physics.failure import HoffmanStrengths
 from fem_region import materials, mesh
 from fem_region.elements import ELEMENTS
 from fem_region.explicit import ExplicitDynamics, PrescribedMotion
-from fem_region.impactor import RigidImpactor
+from physics.impactor import RigidImpactor
 from fem_region.region import FemRegion
 
 from ..checks import check, energy_balance
 from ..params import CaseError, Param, density, modulus, positive
-from .common import FemNodes, fem_only, hold_symmetry_planes
-from .coupled_common import COUPLING, coupled_simulation
+from ..participants.dem import hold_symmetry_planes
+from ..participants.fem import FemNodes, fem_only
+from ..participants.coupled import COUPLING, coupled_simulation
 from .ply_fracture import PLY
 
 NAME = "rod_impact"

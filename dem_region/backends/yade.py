@@ -31,7 +31,7 @@ def _import_yade():
     os.environ.setdefault("OMP_NUM_THREADS", "1")
     # the process's OpenMP runtime is YADE's: the law kernels stay serial, and a count set
     # before (an earlier parallel launch in this process) goes back to the one asked for
-    from .. import law_kernels
+    from physics import law_kernels
     law_kernels.THREADS_ALLOWED = False
     import ctypes
     try:

@@ -1,4 +1,5 @@
-"""Assembling a coupled Simulation: engine, transition interface, shared clock, outputs."""
+"""The coupled assembly: FEM participant, engine, transition interface and tie, the shared
+clock's step and substep count, outputs and guards, as one Simulation."""
 from __future__ import annotations
 
 from typing import Callable
@@ -8,14 +9,15 @@ import numpy as np
 from dem_region.backends import EngineUnavailable, make_backend
 from dem_region.scene import DemScene
 from fem_region.explicit import ExplicitDynamics
+from interfaces.ties import KinematicTie, PenaltyTie
 from interfaces.transition import InterfaceError, TransitionInterface
 
-from interfaces.ties import KinematicTie, PenaltyTie
-
-from ..coupled import CoupledClock
 from ..params import CaseError, Param
 from ..simulation import FieldFrame, Simulation
-from .common import fem_guards, n_steps, time_step
+from ..timestep import n_steps, time_step
+from .clock import CoupledClock
+from .dem import models_critical_dt, particles_escaped
+from .fem import fem_guards
 
 
 # parameters every coupled scene takes (spread into its PARAMETERS)
@@ -68,7 +70,7 @@ def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, st
     dt_fem, dt_dem = fem.critical_dt(), min(backend.critical_dt(), tie.critical_dt(fem.m),
                                             models_critical_dt(models, scene))
     # 0 = automatic: as many substeps as the FEM step allows (with the interface band's
-    # elements among the fast forces the impulse scheme does not resonate: coupling/coupled.py;
+    # elements among the fast forces the impulse scheme does not resonate: coupling/participants/clock.py;
     # the penalty tie resonated at m = 4, k = 2e8 N/m before the band, tests/test_coupled.py)
     auto = max(1, int(np.floor(dt_fem / dt_dem)))
     m = p["clock.substeps"] or auto
@@ -113,20 +115,6 @@ def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, st
     return sim, clock
 
 
-def models_critical_dt(models, scene: DemScene) -> float:
-    """Stable step (s) of the engine's bonds and the coupling layer's law bonds together
-    (their springs add on the same particles; Gershgorin's bound, compressive stiffness),
-    and of impactor penalties."""
-    from dem_region.scene import gershgorin_dt
-    if not models:
-        return np.inf
-    laws = [b for b in models if hasattr(b, "pairs")]
-    others = [m.critical_dt(scene.mass) for m in models if not hasattr(m, "pairs")]
-    pairs = [scene.bonds] + [b.pairs for b in laws]
-    k = [np.maximum(scene.kn, scene.ks)] + [np.broadcast_to(b.law.K, (len(b.pairs),)) * b.area for b in laws]
-    return min(gershgorin_dt(scene.mass, np.vstack(pairs), np.concatenate(k)), *others, np.inf)
-
-
 def _hint(p: dict, tie, m: int, dt: float, dt_dem_stable: float) -> str:
     """What to try when a coupled run goes unstable."""
     if m == 1:
@@ -135,19 +123,3 @@ def _hint(p: dict, tie, m: int, dt: float, dt_dem_stable: float) -> str:
     return (f"{m} DEM substeps per FEM step of {dt:.3g} s = {dt * omega / np.pi:.1f} half-periods of the fastest "
             f"DEM mode ({tie.name} tie): impulse time stepping resonates near whole periods; try "
             "clock.substeps=1 or another substep count")
-
-
-def particles_escaped(backend, scene: DemScene, factor: float = 2.0):
-    """A guard: particles farther from the zone's centre than ``factor`` times its initial
-    half-diagonal have left the damage zone (a blown-up bond, or an interface that lets go)."""
-    centre = 0.5 * (scene.x.min(axis=0) + scene.x.max(axis=0))
-    reach = factor * max(float(np.linalg.norm(scene.x.max(axis=0) - centre)), float(scene.radius.max()))
-
-    def check():
-        d = np.linalg.norm(backend.positions() - centre, axis=1)
-        out = np.flatnonzero(d > reach)
-        if out.size:
-            return (f"DEM: {out.size} particle(s) left the damage zone, first {out[0]} at "
-                    f"{np.round(backend.positions()[out[0]], 6).tolist()} m (unstable bonds or interface)")
-        return None
-    return check

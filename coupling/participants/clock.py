@@ -27,61 +27,14 @@ the back-end contract). For DEM step k:
 """
 from __future__ import annotations
 
-import time
-
 import numpy as np
 
 from dem_region.backends.base import DemBackend
-from dem_region.kernels import add_rows
 from fem_region.explicit import ExplicitDynamics
 from fem_region.kernels import respa_kicks
 
-from .simulation import Stage
-
-
-class ModelStep:
-    """What the coupling-layer models see of the engine during one hook: the positions of the
-    union of their particles read in one bulk call into ``x`` (k, 3) m, their forces summed in
-    ``f`` (k, 3) N and handed over in one call. Law bonds work on these arrays in place
-    (``rows_of``); impactors and loads through positions_of / add_forces. Engines with array
-    access (``bulk_arrays``) take every row each step (the same ids array: their write plan is
-    built once; a zero row adds nothing); the others only the loaded rows (YADE costs ~1 us per
-    particle per call from Python)."""
-
-    def __init__(self, backend, models):
-        self.backend = backend
-        self.ids = np.unique(np.concatenate([m.ids for m in models])) if models else np.zeros(0, int)
-        self._index = np.full(int(self.ids.max()) + 1 if len(self.ids) else 0, -1)
-        self._index[self.ids] = np.arange(len(self.ids))
-        self.x, self.f = np.zeros((len(self.ids), 3)), np.zeros((len(self.ids), 3))
-        self._read = getattr(backend, "read_positions", None)
-        self._bulk = getattr(backend, "bulk_arrays", False)
-
-    def run(self, models, dt: float) -> None:
-        if not models:
-            return
-        if self._read is not None:
-            self._read(self.ids, self.x)
-        else:
-            self.x[:] = self.backend.positions_of(self.ids)
-        self.f[:] = 0.0
-        for model in models:
-            model.apply(self, dt)
-        if self._bulk:
-            self.backend.add_forces(self.ids, self.f)
-            return
-        loaded = np.flatnonzero(np.any(self.f != 0.0, axis=1))
-        if loaded.size:
-            self.backend.add_forces(self.ids[loaded], self.f[loaded])
-
-    def rows_of(self, ids: np.ndarray) -> np.ndarray:
-        return self._index[np.asarray(ids, int)]
-
-    def positions_of(self, ids: np.ndarray) -> np.ndarray:
-        return self.x[self._index[np.asarray(ids, int)]]
-
-    def add_forces(self, ids: np.ndarray, F: np.ndarray) -> None:
-        add_rows(self.f, self._index[np.asarray(ids, int)], np.ascontiguousarray(F, float).reshape(-1, 3))
+from ..simulation import Stage, run_stages
+from .dem import ModelStep
 
 
 def interface_band(region, W) -> np.ndarray:
@@ -109,7 +62,6 @@ class CoupledClock:
         self.dt_dem = dt_fem / self.m
         self.k = 0  # DEM steps whose forces have been handed over
         self.interface_work = 0.0  # J, work of the tie forces on the FEM (internal to the system)
-        self.inner = {"fem": 0.0, "interface": 0.0, "models": 0.0}
         self.snapshot: dict[str, float] = {}
         self.momentum_snapshot = np.zeros(3)
         self.snapshot_every = 1  # FEM steps between snapshots (the history interval) ...
@@ -122,40 +74,58 @@ class CoupledClock:
         self._band = fem.region.element_force(self.band_elements) if self.band_elements.size else None
         shape = fem.state.v.shape  # the kicks' buffers (respa_kicks), rewritten at every DEM step
         self._f_fast, self._a_slow, self._no_band = np.zeros(shape), np.zeros(shape), np.zeros((0, shape[1]))
+        # one DEM step's work inside the engine's hook (after its forces at x_k, before it
+        # moves), in this order; each stage is timed (summary.json "stages")
+        self.hook_stages = [
+            Stage("laws", "models", self._laws),  # first, so that the interface forces include theirs
+            Stage("interface.read", "interface", self._read_interface),
+            Stage("fem.forces", "fem", self._fem_forces),
+            Stage("fem.kick_drift", "fem", self._fem_kick_drift),
+            Stage("interface.write", "interface", self._write_interface)]
+        self._slow, self._band_f = True, self._no_band
         dem.set_dt(self.dt_dem)
         dem.start(self._between)
-        # the first hook ran at set-up, outside the clock's "dem" stage: not to be taken out of
-        # it (numba compiling there made the engine bucket negative)
-        self.inner = dict.fromkeys(self.inner, 0.0)
+        # the first hook ran at set-up, outside the clock's engine stage: not to be counted
+        # (numba compiling there made the engine bucket negative)
+        for stage in self.hook_stages:
+            stage.seconds = 0.0
         if hasattr(dem, "transport_s"):
             dem.transport_s = 0.0
 
     def _between(self) -> None:
-        clock = time.perf_counter
-        fem = self.fem
-        t0 = clock()
-        # first, so that the interface forces include theirs
+        run_stages(self.hook_stages)
+
+    def _laws(self) -> None:
         self._model_step.run(self.models, self.dt_dem if self.k else 0.0)
-        t_law = clock()
-        f_tie = self.f_tie = self.tie.fast_force(fem.region.X + fem.state.u)
-        t1 = clock()
-        band = self._no_band if self._band is None else self._band(fem.state.u)
-        slow = self.k % self.m == 0
-        if slow:
-            fem.compute_forces()  # the FEM's own forces at t_n
+
+    def _read_interface(self) -> None:
+        """The tie's forces from the particles on the FEM nodes at x_k (fast forces)."""
+        fem = self.fem
+        self.f_tie = self.tie.fast_force(fem.region.X + fem.state.u)
+
+    def _fem_forces(self) -> None:
+        """The band's forces at every DEM step; at a FEM step (every m-th) the FEM's own
+        forces at t_n, and the ledger's snapshot there."""
+        fem = self.fem
+        self._band_f = self._no_band if self._band is None else self._band(fem.state.u)
+        self._slow = self.k % self.m == 0
+        if self._slow:
+            fem.compute_forces()
             n = self.k // self.m
             if n % self.snapshot_every == 0 or n == self.last_window:  # at t_n, before the kicks
-                self._kicks(band, slow, False)
+                self._kicks(self._band_f, True, False)
                 self._snapshot(self._f_fast, self._a_slow)
-        self._kicks(band, slow, True)
+
+    def _fem_kick_drift(self) -> None:
+        fem = self.fem
+        self._kicks(self._band_f, self._slow, True)
         fem.drift(self.dt_dem)
-        self.interface_work += self.dt_dem * float(np.vdot(f_tie, fem.state.v))
-        t2 = clock()
-        self.tie.follow(fem.state.v)
+        self.interface_work += self.dt_dem * float(np.vdot(self.f_tie, fem.state.v))
+
+    def _write_interface(self) -> None:
+        """Kinematic tie: the interface particles' velocities for the engine's next move."""
+        self.tie.follow(self.fem.state.v)
         self.k += 1
-        self.inner["interface"] += (t1 - t_law) + (clock() - t2)
-        self.inner["models"] += t_law - t0
-        self.inner["fem"] += t2 - t1
 
     def _kicks(self, band: np.ndarray, slow: bool, kick: bool) -> None:
         """f_fast = f_tie - band, a_slow (at a FEM step) and, with ``kick``, the FEM's kicks."""
@@ -217,7 +187,8 @@ class CoupledClock:
             self.dem.advance(self._between)
 
     def stages(self) -> list[Stage]:
-        return [Stage("dem.step x m (FEM kicks, drift and tie inside the engine's hook)", "dem", self.step)]
+        """One FEM step: m engine steps, each running ``hook_stages`` inside its hook."""
+        return [Stage(f"engine.step x {self.m}", "dem", self.step, substages=self.hook_stages)]
 
     def energies(self) -> dict[str, float]:
         """Ledger of the coupled system at the last snapshot (the tie's work is internal)."""
@@ -229,7 +200,6 @@ class CoupledClock:
         return self.momentum_snapshot
 
     def timing_correction(self) -> dict[str, float]:
-        """Move the time spent inside the hook out of the DEM bucket."""
-        inner = sum(self.inner.values())
-        transport = getattr(self.dem, "transport_s", 0.0)  # a worker's messages and copies
-        return {"dem": -inner - transport, **self.inner, "transport": transport}
+        """A worker's messages and copies, out of the engine's bucket."""
+        transport = getattr(self.dem, "transport_s", 0.0)
+        return {"dem": -transport, "transport": transport}

@@ -1,17 +1,19 @@
-"""Pieces every scene shares: FEM options, the time step rule, the FEM-only clock stages."""
+"""The FEM participant: an explicit FEM far field (fem_region.ExplicitDynamics) with the
+case's FEM options, its output frames, its run-time guards, law bonds on its nodes, and a run
+of it alone (``--mode fem``)."""
 from __future__ import annotations
-
-import math
 
 import numpy as np
 
-from fem_region.explicit import ExplicitDynamics
 from fem_region import mesh
 from fem_region.elements import ELEMENTS
+from fem_region.explicit import ExplicitDynamics
 from fem_region.region import FORMULATIONS, INTEGRATIONS, FemRegion
 
 from ..params import CaseError, Param
 from ..simulation import FieldFrame, Simulation, Stage
+from ..timestep import n_steps, time_step
+
 
 FEM_OPTIONS: dict[str, Param] = {
     "mesh.element": Param("quad4", "2D element", kind="str", choices=("quad4", "tri3")),
@@ -29,25 +31,6 @@ def make_region(m, p: dict, D: np.ndarray, rho, thickness: float) -> FemRegion:
                          p["fem.integration"], p["fem.formulation"])
     except ValueError as exc:
         raise CaseError(f"fem.integration = {p['fem.integration']!r}: {exc}") from None
-
-
-def time_step(p: dict, dt_stable: float) -> float:
-    """clock.dt if given (refused above the stable step), else clock.safety x stable step (s)."""
-    if p["clock.dt"] > dt_stable:
-        raise CaseError(f"clock.dt = {p['clock.dt']:g}: above the stable step; allowed <= {dt_stable:.4g} s")
-    return p["clock.dt"] or p["clock.safety"] * dt_stable
-
-
-def n_steps(p: dict, t_end_default: float, dt: float) -> tuple[int, float]:
-    """(steps, dt) such that steps * dt = t_end exactly, dt not above the given dt."""
-    t_end = p["clock.t_end"] or t_end_default
-    ratio = t_end / dt
-    if not ratio <= p["clock.max_steps"]:  # (also inf: a denormal dt) refused before anything runs
-        raise CaseError(f"clock.max_steps = {p['clock.max_steps']}: this run needs {ratio:.3g} clock steps "
-                        f"({t_end:.4g} s at dt = {dt:.4g} s); allowed: raise clock.max_steps, or shorten clock.t_end "
-                        "or raise clock.dt")
-    n = max(1, math.ceil(ratio - 1e-9))
-    return n, t_end / n
 
 
 def fem_fields(dyn: ExplicitDynamics):
@@ -178,12 +161,3 @@ class NodeBondForces:
     def restore_state(self, d: dict) -> None:
         self.bonds.restore_state(d["bonds"])
         self.last = float(d["last"])
-
-
-def hold_symmetry_planes(backend, i: np.ndarray, j: np.ndarray, held: np.ndarray) -> None:
-    """Particles on the planes x = 0 (column i == 0) and y = 0 (j == 0) of a quarter model
-    keep x, y or both at rest; ``held``: particles another constraint drives (tie, clamp)."""
-    for dofs, on in (("xy", (i == 0) & (j == 0)), ("x", (i == 0) & (j > 0)), ("y", (j == 0) & (i > 0))):
-        ids = np.setdiff1d(np.flatnonzero(on), held)
-        backend.prescribe(ids, dofs)
-        backend.set_velocities(ids, np.zeros((len(ids), 3)))

@@ -1,0 +1,210 @@
+"""The DEM participant: an engine (in-process or in a worker) with the coupling layer's models
+on its particles (law bonds, impactors, loads), read and written in one bulk call per step;
+its guards; and a run of it alone (``--mode dem``), the reference for a coupled model: the
+same scene entirely as particles, with prescribed particles instead of a FEM."""
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+
+from dem_region.backends import EngineUnavailable, make_backend
+from dem_region.scene import DemScene, gershgorin_dt
+from physics.kernels import add_rows
+
+from ..params import CaseError
+from ..simulation import FieldFrame, Simulation, Stage, run_stages
+from ..timestep import n_steps, time_step
+
+
+class ModelStep:
+    """What the coupling-layer models see of the engine during one hook: the positions of the
+    union of their particles read in one bulk call into ``x`` (k, 3) m, their forces summed in
+    ``f`` (k, 3) N and handed over in one call. Law bonds work on these arrays in place
+    (``rows_of``); impactors and loads through positions_of / add_forces. Engines with array
+    access (``bulk_arrays``) take every row each step (the same ids array: their write plan is
+    built once; a zero row adds nothing); the others only the loaded rows (YADE costs ~1 us per
+    particle per call from Python)."""
+
+    def __init__(self, backend, models):
+        self.backend = backend
+        self.ids = np.unique(np.concatenate([m.ids for m in models])) if models else np.zeros(0, int)
+        self._index = np.full(int(self.ids.max()) + 1 if len(self.ids) else 0, -1)
+        self._index[self.ids] = np.arange(len(self.ids))
+        self.x, self.f = np.zeros((len(self.ids), 3)), np.zeros((len(self.ids), 3))
+        self._read = getattr(backend, "read_positions", None)
+        self._bulk = getattr(backend, "bulk_arrays", False)
+
+    def run(self, models, dt: float) -> None:
+        if not models:
+            return
+        if self._read is not None:
+            self._read(self.ids, self.x)
+        else:
+            self.x[:] = self.backend.positions_of(self.ids)
+        self.f[:] = 0.0
+        for model in models:
+            model.apply(self, dt)
+        if self._bulk:
+            self.backend.add_forces(self.ids, self.f)
+            return
+        loaded = np.flatnonzero(np.any(self.f != 0.0, axis=1))
+        if loaded.size:
+            self.backend.add_forces(self.ids[loaded], self.f[loaded])
+
+    def rows_of(self, ids: np.ndarray) -> np.ndarray:
+        return self._index[np.asarray(ids, int)]
+
+    def positions_of(self, ids: np.ndarray) -> np.ndarray:
+        return self.x[self._index[np.asarray(ids, int)]]
+
+    def add_forces(self, ids: np.ndarray, F: np.ndarray) -> None:
+        add_rows(self.f, self._index[np.asarray(ids, int)], np.ascontiguousarray(F, float).reshape(-1, 3))
+
+
+class PrescribedParticles:
+    """Particles ``ids`` driven with velocity(t) -> (3,) or (len(ids), 3) m/s; tracks the work
+    the drive does."""
+
+    def __init__(self, backend, ids: np.ndarray, velocity: Callable[[float], np.ndarray], dt: float,
+                 dofs: str = "xyz"):
+        self.backend, self.ids, self.velocity, self.dt = backend, np.asarray(ids, int), velocity, dt
+        self.k = 0
+        self.work = 0.0  # J, by the drive: minus the chain's force on the driven particles
+        self.dofs = [("xyz".index(c)) for c in dofs]
+        backend.prescribe(self.ids) if dofs == "xyz" else backend.prescribe(self.ids, dofs)
+
+    def between(self) -> None:
+        F = self.backend.forces(self.ids)
+        v = np.asarray(self.velocity((self.k + 0.5) * self.dt), float)
+        v = np.tile(v, (len(self.ids), 1)) if v.ndim == 1 else v  # one velocity for all, or one each
+        self.work += float(np.sum(-F[:, self.dofs] * v[:, self.dofs])) * self.dt  # midpoint rule, driven DOFs
+        self.backend.set_velocities(self.ids, v)
+        self.k += 1
+
+
+def dem_only(p: dict, scene: DemScene, dem: str, t_end_default: float,
+             drive: tuple[np.ndarray, Callable[[float], np.ndarray]] | None = None, history_every: int = 0,
+             dt: float = 0.0, models: tuple = (), drive_dofs: str = "xyz"):
+    """(Simulation, backend, PrescribedParticles or None) for ``scene`` alone, driven on
+    drive[0] with velocity drive[1](t) if given; dt: the step if the scene sets it (s);
+    models: coupling-layer models on the engine's particles (LawBonds, ParticleImpactor);
+    drive_dofs: the translations the drive prescribes (the others stay free)."""
+    steps = [0]  # hook calls so far (the models' first call has no step behind it)
+    try:
+        backend = make_backend(dem, p["dem.process"], p["dem.ranks"])
+    except EngineUnavailable as exc:
+        raise CaseError(str(exc)) from None
+    try:
+        backend.build(scene)
+        if models and not hasattr(backend, "add_forces"):
+            raise NotImplementedError("bond laws and impactors evaluated by the coupling layer need added particle forces")
+        dt_stable = min(backend.critical_dt(), models_critical_dt(models, scene))
+        n, dt = n_steps(p, t_end_default, min(dt, dt_stable) if dt else time_step(p, dt_stable))
+        driver = PrescribedParticles(backend, drive[0], drive[1], dt, drive_dofs) if drive else None
+        substages = []  # inside the engine's hook, in order
+        if models:
+            view, order = ModelStep(backend, list(models)), list(models)
+
+            def laws():
+                view.run(order, dt if steps[0] else 0.0)
+                steps[0] += 1
+            substages.append(Stage("laws", "models", laws))  # first: the drive reads their forces
+        if driver:
+            substages.append(Stage("drive", "dem", driver.between))
+        hook = (lambda: run_stages(substages)) if substages else None
+        backend.set_dt(dt)
+        backend.start(hook)
+        for stage in substages:  # the first hook ran at set-up, outside the clock's stages
+            stage.seconds = 0.0
+    except NotImplementedError as exc:
+        backend.finalize()
+        raise CaseError(f"--dem {dem}: {exc}") from None
+    except BaseException:
+        backend.finalize()
+        raise
+    def energies():
+        d = backend.energies()
+        work = 0.0
+        if driver:  # the drive's work up to the move that follows the last force evaluation
+            F, v = backend.forces(driver.ids)[:, driver.dofs], backend.velocities()[driver.ids][:, driver.dofs]
+            work = driver.work - float(np.sum(-F * v)) * dt
+        e = [m.energies() for m in models]
+        return {"kinetic": d["kinetic"] + sum(x["kinetic"] for x in e), "internal": d["elastic"] + sum(x["internal"] for x in e),
+                "external_work": work + sum(x.get("external_work", 0.0) for x in e), "dissipated": d["dissipated"] + sum(x["dissipated"] for x in e)}
+
+    pts0 = scene.x
+
+    def fields() -> FieldFrame:
+        return FieldFrame(pts0, {"vertex": np.arange(scene.n)[:, None]},
+                          {"displacement": backend.positions() - scene.x, "radius": scene.radius})
+
+    sim = Simulation(
+        stages=[Stage("engine.step", "dem", lambda: backend.advance(hook), substages=substages)], dt=dt, n_steps=n,
+        history_every=history_every or p["output.history_every"] or max(1, n // 1000), probes={}, energies=energies,
+        counts={"fem_nodes": 0, "fem_elements": 0, "particles": scene.n, "bonds": len(scene.bonds),
+                "interface_particles": 0, "law_bonds": sum(len(m.pairs) for m in models if hasattr(m, "pairs"))},
+        clock_info={"dt_fem": 0.0, "dt_dem": dt, "dt_stable_dem": dt_stable, "substeps": 1},
+        fields=fields, field_frames=p["output.field_frames"], energy_growth_tol=p["guards.energy_growth"],
+        close=backend.finalize, versions={dem: backend.version},
+        checkpoint=(lambda: (_state(driver, models, steps), lambda d: backend.checkpoint(d / backend.restart_file)))
+        if backend.supports_checkpoint else None,
+        restore=lambda state, d: _restore(state, driver, models, steps, backend, d / backend.restart_file),
+        timing_correction=lambda: {"dem": -getattr(backend, "transport_s", 0.0),
+                                   "transport": getattr(backend, "transport_s", 0.0)})
+    return sim, backend, driver
+
+
+def _state(driver, models, steps) -> dict:
+    """What a checkpoint of a DEM-only run holds besides the engine's own restart file."""
+    d = {"hook_steps": steps[0], "models": [m.checkpoint_state() for m in models]}
+    if driver:
+        d["driver"] = {"k": driver.k, "work": driver.work}
+    return d
+
+
+def _restore(d: dict, driver, models, steps, backend, engine_file) -> None:
+    steps[0] = int(d["hook_steps"])
+    for m, state in zip(models, d.get("models", [])):
+        m.restore_state(state)
+    if driver:
+        driver.k, driver.work = int(d["driver"]["k"]), float(d["driver"]["work"])
+    backend.restore(engine_file)
+
+
+def models_critical_dt(models, scene: DemScene) -> float:
+    """Stable step (s) of the engine's bonds and the coupling layer's law bonds together
+    (their springs add on the same particles; Gershgorin's bound, compressive stiffness),
+    and of impactor penalties."""
+    if not models:
+        return np.inf
+    laws = [b for b in models if hasattr(b, "pairs")]
+    others = [m.critical_dt(scene.mass) for m in models if not hasattr(m, "pairs")]
+    pairs = [scene.bonds] + [b.pairs for b in laws]
+    k = [np.maximum(scene.kn, scene.ks)] + [np.broadcast_to(b.law.K, (len(b.pairs),)) * b.area for b in laws]
+    return min(gershgorin_dt(scene.mass, np.vstack(pairs), np.concatenate(k)), *others, np.inf)
+
+
+def particles_escaped(backend, scene: DemScene, factor: float = 2.0):
+    """A guard: particles farther from the zone's centre than ``factor`` times its initial
+    half-diagonal have left the damage zone (a blown-up bond, or an interface that lets go)."""
+    centre = 0.5 * (scene.x.min(axis=0) + scene.x.max(axis=0))
+    reach = factor * max(float(np.linalg.norm(scene.x.max(axis=0) - centre)), float(scene.radius.max()))
+
+    def check():
+        d = np.linalg.norm(backend.positions() - centre, axis=1)
+        out = np.flatnonzero(d > reach)
+        if out.size:
+            return (f"DEM: {out.size} particle(s) left the damage zone, first {out[0]} at "
+                    f"{np.round(backend.positions()[out[0]], 6).tolist()} m (unstable bonds or interface)")
+        return None
+    return check
+
+
+def hold_symmetry_planes(backend, i: np.ndarray, j: np.ndarray, held: np.ndarray) -> None:
+    """Particles on the planes x = 0 (column i == 0) and y = 0 (j == 0) of a quarter model
+    keep x, y or both at rest; ``held``: particles another constraint drives (tie, clamp)."""
+    for dofs, on in (("xy", (i == 0) & (j == 0)), ("x", (i == 0) & (j > 0)), ("y", (j == 0) & (i > 0))):
+        ids = np.setdiff1d(np.flatnonzero(on), held)
+        backend.prescribe(ids, dofs)
+        backend.set_velocities(ids, np.zeros((len(ids), 3)))

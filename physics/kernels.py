@@ -1,0 +1,231 @@
+"""Per-step loops over bonds compiled with numba (the laws the coupling layer evaluates).
+
+numpy's scatter (np.add.at) and small einsums cost more than the arithmetic at the bond
+counts of a damage zone (10^2 .. 10^5 bonds, every engine step); these loops visit each bond
+once. Each mirrors a vectorised reference in laws.py / law_bonds.py, and the tests compare them.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def scatter_pairs(loc, F, n):
+    """(n, 3) N: +F (nb, 3) on each bond's second end, -F on its first (loc (nb, 2) rows)."""
+    f = np.zeros((n, 3))
+    for b in range(loc.shape[0]):
+        for k in range(3):
+            f[loc[b, 1], k] += F[b, k]
+            f[loc[b, 0], k] -= F[b, k]
+    return f
+
+
+@njit(cache=True)
+def add_rows(target, ids, F):
+    """target[ids] += F for (k, 3) rows F, repeated ids summed (np.add.at, without its overhead)."""
+    for r in range(ids.shape[0]):
+        for k in range(3):
+            target[ids[r], k] += F[r, k]
+
+
+@njit(cache=True)
+def add_slope_forces(f, loc, normal, q, a, b):
+    """The work-conjugate forces of an interface slip's slope term, into f (n, 3) N: each
+    bond's q (nb,) N acts along the normal of its neighbour pairs, -q on both particles of
+    the next pair b and +q on both of the previous pair a (a, b (nb,) bond rows)."""
+    for m in range(loc.shape[0]):
+        for c, s in ((b[m], -q[m]), (a[m], q[m])):
+            for k in range(3):
+                g = s * normal[c, k]
+                f[loc[c, 0], k] += g
+                f[loc[c, 1], k] += g
+
+
+@njit(cache=True)
+def bond_stress(loc, force, d0, cell, n):
+    """(nb, 6) Voigt Pa: mean of the end particles' Love-Weber stresses
+    sigma_p = sum_b (f_b (x) l_b) / (2 V_p), f_b = A_b t_b (tension positive), symmetrised."""
+    s = np.zeros((n, 3, 3))
+    for b in range(loc.shape[0]):
+        for i in range(3):
+            for j in range(3):
+                v = 0.5 * force[b, i] * d0[b, j]
+                s[loc[b, 0], i, j] += v
+                s[loc[b, 1], i, j] += v
+    out = np.empty((loc.shape[0], 6))
+    pairs = ((0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1))
+    for b in range(loc.shape[0]):
+        p, q = loc[b, 0], loc[b, 1]
+        for k in range(6):
+            i, j = pairs[k]
+            a = 0.5 * (s[p, i, j] + s[p, j, i]) / cell[p]
+            c = 0.5 * (s[q, i, j] + s[q, j, i]) / cell[q]
+            out[b, k] = 0.5 * (a + c)
+    return out
+
+
+@njit(cache=True)
+def hoffman_coefficients(k):
+    """The Hoffman index's nine coefficients from the strengths k = (Xt, Xc, Yt, Yc, Zt, Zc,
+    S23, S13, S12) Pa: three quadratic, three linear, the three shear strengths."""
+    Xt, Xc, Yt, Yc, Zt, Zc, S23, S13, S12 = k
+    X, Y, Z = 1 / (Xt * Xc), 1 / (Yt * Yc), 1 / (Zt * Zc)
+    return (0.5 * (Y + Z - X), 0.5 * (Z + X - Y), 0.5 * (X + Y - Z),
+            1 / Xt - 1 / Xc, 1 / Yt - 1 / Yc, 1 / Zt - 1 / Zc, S23, S13, S12)
+
+
+@njit(cache=True)
+def hoffman_bond(stress, scale, R, c):
+    """Hoffman index of one global Voigt stress (6,) Pa / scale, in the ply axes R (3, 3)
+    (columns); c = hoffman_coefficients(strengths)."""
+    q23, q31, q12, l1, l2, l3, S23, S13, S12 = c
+    xx, yy, zz, yz, xz, xy = (stress[0] / scale, stress[1] / scale, stress[2] / scale,
+                              stress[3] / scale, stress[4] / scale, stress[5] / scale)
+    s1, s2, s3 = _turned(R, xx, yy, zz, yz, xz, xy, 0, 0), _turned(R, xx, yy, zz, yz, xz, xy, 1, 1), \
+        _turned(R, xx, yy, zz, yz, xz, xy, 2, 2)
+    t23, t13, t12 = _turned(R, xx, yy, zz, yz, xz, xy, 1, 2), _turned(R, xx, yy, zz, yz, xz, xy, 0, 2), \
+        _turned(R, xx, yy, zz, yz, xz, xy, 0, 1)
+    return (q23 * (s2 - s3) ** 2 + q31 * (s3 - s1) ** 2 + q12 * (s1 - s2) ** 2
+            + l1 * s1 + l2 * s2 + l3 * s3 + (t23 / S23) ** 2 + (t13 / S13) ** 2 + (t12 / S12) ** 2)
+
+
+@njit(cache=True)
+def hoffman_bond_aligned(stress, scale, sel, c):
+    """The same index where the ply axes are a signed permutation of x, y, z (0 and 90 plies):
+    the ply-axes components are global ones, sel (6,) their Voigt positions (bit-identical to
+    the turned form: every other product is an exact zero)."""
+    q23, q31, q12, l1, l2, l3, S23, S13, S12 = c
+    s1, s2, s3, t23, t13, t12 = (stress[sel[0]], stress[sel[1]], stress[sel[2]], stress[sel[3]], stress[sel[4]],
+                                 stress[sel[5]])
+    if scale != 1.0:
+        s1, s2, s3, t23, t13, t12 = s1 / scale, s2 / scale, s3 / scale, t23 / scale, t13 / scale, t12 / scale
+    return (q23 * (s2 - s3) ** 2 + q31 * (s3 - s1) ** 2 + q12 * (s1 - s2) ** 2
+            + l1 * s1 + l2 * s2 + l3 * s3 + (t23 / S23) ** 2 + (t13 / S13) ** 2 + (t12 / S12) ** 2)
+
+
+def aligned_voigt(R: np.ndarray) -> np.ndarray | None:
+    """(6,) Voigt positions of the ply-axes stresses (11, 22, 33, 23, 13, 12) when the axes R
+    (3, 3) (columns) are a signed permutation of x, y, z to 1e-12 (a 90 degree turn by cos / sin
+    leaves 6e-17: its products are below half an ulp of the terms they join); None otherwise."""
+    snapped = np.round(R)
+    if not (np.all(np.abs(R - snapped) < 1e-12) and np.all(np.abs(snapped).sum(axis=0) == 1)):
+        return None
+    R = snapped
+    g = np.abs(R).argmax(axis=0)  # ply axis a is global axis g[a]
+    voigt = {(0, 0): 0, (1, 1): 1, (2, 2): 2, (1, 2): 3, (0, 2): 4, (0, 1): 5}
+    key = lambda i, j: voigt[(min(i, j), max(i, j))]
+    return np.array([key(g[0], g[0]), key(g[1], g[1]), key(g[2], g[2]), key(g[1], g[2]), key(g[0], g[2]),
+                     key(g[0], g[1])], np.int64)
+
+
+@njit(cache=True)
+def _turned(R, xx, yy, zz, yz, xz, xy, a, c):
+    """(R^T S R)[a, c] of the symmetric S given by its six components, axes R (3, 3) (columns),
+    summed over i, j in order (the association of the numpy form: its digits, not only its value)."""
+    ra0, ra1, ra2, rc0, rc1, rc2 = R[0, a], R[1, a], R[2, a], R[0, c], R[1, c], R[2, c]
+    acc = ra0 * xx * rc0
+    acc += ra0 * xy * rc1
+    acc += ra0 * xz * rc2
+    acc += ra1 * xy * rc0
+    acc += ra1 * yy * rc1
+    acc += ra1 * yz * rc2
+    acc += ra2 * xz * rc0
+    acc += ra2 * yz * rc1
+    acc += ra2 * zz * rc2
+    return acc
+
+
+@njit(cache=True)
+def hoffman_ply(stress, axes, scale, k):
+    """(nb,) Hoffman index of global Voigt stresses (nb, 6) / scale (nb,) in the bonds' ply axes
+    (nb, 3, 3) (columns); k = (Xt, Xc, Yt, Yc, Zt, Zc, S23, S13, S12)."""
+    out = np.empty(stress.shape[0])
+    c = hoffman_coefficients(k)
+    for b in range(stress.shape[0]):
+        out[b] = hoffman_bond(stress[b], scale[b], axes[b], c)
+    return out
+
+
+@njit(cache=True)
+def corotate_2d(x, loc, a, b, s0, d0, local, rot, chord):
+    """Each bond's branch vector in the frame turned by the angle theta of the chord s from
+    bond a's midpoint to bond b's (reference chord s0), into local (nb, 3) m; rot (nb, 2) the
+    cos, sin of theta; chord (nb, 3) s. Returns delta = local - d0 (nb, 3) m."""
+    nb = loc.shape[0]
+    delta = np.empty((nb, 3))
+    for m in range(nb):
+        for k in range(2):
+            chord[m, k] = 0.5 * (x[loc[b[m], 0], k] + x[loc[b[m], 1], k] - x[loc[a[m], 0], k] - x[loc[a[m], 1], k])
+        chord[m, 2] = 0.0
+        th = np.arctan2(s0[m, 0] * chord[m, 1] - s0[m, 1] * chord[m, 0], s0[m, 0] * chord[m, 0] + s0[m, 1] * chord[m, 1])
+        c, s = np.cos(th), np.sin(th)
+        dx = x[loc[m, 1], 0] - x[loc[m, 0], 0]
+        dy = x[loc[m, 1], 1] - x[loc[m, 0], 1]
+        local[m, 0] = c * dx + s * dy
+        local[m, 1] = -s * dx + c * dy
+        local[m, 2] = x[loc[m, 1], 2] - x[loc[m, 0], 2]
+        rot[m, 0], rot[m, 1] = c, s
+        for k in range(3):
+            delta[m, k] = local[m, k] - d0[m, k]
+    return delta
+
+
+@njit(cache=True)
+def add_spin_forces(f, loc, a, b, t, local, chord, area):
+    """The corotated frame's share of the forces into f (n, 3) N: A dPsi/dtheta dtheta/ds, half
+    on each particle of the next pair b (minus) and of the previous pair a (plus)."""
+    for m in range(loc.shape[0]):
+        M = area[m] * (t[m, 0] * local[m, 1] - t[m, 1] * local[m, 0])
+        q = 0.5 * M / (chord[m, 0] ** 2 + chord[m, 1] ** 2)
+        gx, gy = -q * chord[m, 1], q * chord[m, 0]
+        for k in range(2):
+            f[loc[b[m], k], 0] -= gx
+            f[loc[b[m], k], 1] -= gy
+            f[loc[a[m], k], 0] += gx
+            f[loc[a[m], k], 1] += gy
+
+
+@njit(cache=True)
+def _einsum_dot(a, a0, b):
+    """sum_i (a_i - a0_i) b_i in the order numpy's einsum adds three terms, (0 + 2) + 1 (its
+    digits, not only its value)."""
+    if a.shape[0] == 3:
+        return ((a[0] - a0[0]) * b[0] + (a[2] - a0[2]) * b[2]) + (a[1] - a0[1]) * b[1]
+    acc = 0.0
+    for i in range(a.shape[0]):
+        acc += (a[i] - a0[i]) * b[i]
+    return acc
+
+
+@njit(cache=True)
+def ball_contact(x, v, centre, velocity, radius, penalty, friction, slip2, f):
+    """Penalty contact of a rigid ball (a disc in 2D) with points x (m, dim) m moving at v
+    (m, dim) m/s: normal force penalty x penetration along the outward normal, Coulomb friction
+    against the tangential slip regularised by slip2 (m/s)^2 (RigidImpactor.forces for the
+    ball, each point once: the numpy form's digits). f (m, dim) N out; returns the sum of the
+    squared penetrations m^2."""
+    m, dim = x.shape
+    pen2 = 0.0
+    d, vt, still = np.empty(dim), np.empty(dim), np.zeros(dim)  # normal, tangential slip rate
+    for p in range(m):
+        r2 = 0.0
+        for i in range(dim):
+            d[i] = x[p, i] - centre[i]
+            r2 += d[i] * d[i]
+        r = np.sqrt(r2)
+        rr = max(r, 1e-300)
+        pen = max(radius - r, 0.0)
+        fn = penalty * pen
+        for i in range(dim):
+            d[i] = d[i] / rr  # the normal
+            f[p, i] = fn * d[i]
+        if friction > 0:
+            vn = _einsum_dot(v[p], velocity, d)
+            for i in range(dim):
+                vt[i] = (v[p, i] - velocity[i]) - vn * d[i]
+            c = friction * fn / np.sqrt(_einsum_dot(vt, still, vt) + slip2)
+            for i in range(dim):
+                f[p, i] -= c * vt[i]
+        pen2 += pen * pen
+    return pen2
