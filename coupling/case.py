@@ -14,6 +14,8 @@ from typing import Any
 
 from .params import CaseError, Param, flatten, resolve
 from .scenes import SCENES, Scene
+from .study import Study, renamed
+from .study.schema import is_study
 
 CASES_DIR = Path(__file__).resolve().parent.parent / "cases"
 MODES = ("coupled", "fem", "dem")
@@ -79,6 +81,8 @@ def load_case(name_or_path: str, overrides: dict[str, Any] | None = None) -> Cas
     """Read, validate and resolve a case; ``overrides`` are --set values (strings allowed)."""
     path = find_case(name_or_path)
     data = _parse(path)
+    if is_study(data):
+        return _load_study(path, data, overrides)
     meta = data.pop("case", None)
     if not isinstance(meta, dict) or "scene" not in meta:
         raise CaseError(f"{path}: case.scene missing; allowed scenes: {', '.join(SCENES)}")
@@ -105,6 +109,27 @@ def load_case(name_or_path: str, overrides: dict[str, Any] | None = None) -> Cas
     return Case(name, scene, params, path.absolute(), meta.get("description", ""), frozenset(overrides or ()))
 
 
+def _load_study(path: Path, data: dict, overrides: dict[str, Any] | None) -> Case:
+    """A study file: its schema from its own tables, then the same resolution as a scene's."""
+    meta = data.get("case", {})
+    name = meta.get("name", path.stem) if isinstance(meta, dict) else path.stem
+    if not isinstance(name, str) or not CASE_NAME.fullmatch(name):
+        raise CaseError(f"case.name = {name!r}: allowed letters, digits and _ . - (not first), "
+                        "at most 100 characters")
+    study = Study(name, data, path.name)
+    schema = {**COMMON, **study.PARAMETERS}
+    given = flatten({k: v for k, v in data.items() if k not in ("case", "ranges")})
+    params = resolve(schema, given, f"case file {path.name}")
+    if overrides:
+        resolve(schema, overrides, "--set", renamed=lambda key: renamed(key, study))
+        fixed = sorted(k for k in overrides if study.structural(k) and schema[k].coerce(k, overrides[k]) != params[k])
+        if fixed:
+            raise CaseError(f"{fixed[0]}: says what the table is; allowed: change it in the case file "
+                            f"({path.name}), not with --set")
+        params.update({k: schema[k].coerce(k, v) for k, v in overrides.items()})
+    return Case(name, study, params, path.absolute(), study.DESCRIPTION, frozenset(overrides or ()))
+
+
 def refuse_ineffective(case: Case, mode: str, dem: str | None) -> None:
     """CaseError for a setting that would change nothing in this configuration (a user who
     sets it expects an effect): DEM and coupling keys of --set in a run without them, a
@@ -112,8 +137,8 @@ def refuse_ineffective(case: Case, mode: str, dem: str | None) -> None:
     p = case.parameters
     if mode == "fem" and dem is not None:
         raise CaseError(f"--dem {dem}: --mode fem runs no DEM engine; allowed: leave --dem out")
-    no_dem = ("dem.", "particle.", "interface.tie", "clock.substeps")
-    no_tie = ("interface.tie", "clock.substeps", "dem.half_width")  # all-DEM: the zone is the whole body
+    no_dem = ("dem.", "particle.", "coupling.tie", "clock.substeps", "zone.half_width", "zone.shape")
+    no_tie = ("coupling.tie", "clock.substeps", "dem.half_width", "zone.half_width")  # all-DEM: the zone is the whole body
     schema = {**COMMON, **case.scene.PARAMETERS}
     for key in sorted(k for k in case.given if p[k] != schema[k].default):  # the default changes nothing
         if mode == "fem" and key.startswith(no_dem) or mode == "dem" and key.startswith(no_tie):
@@ -122,9 +147,9 @@ def refuse_ineffective(case: Case, mode: str, dem: str | None) -> None:
     if "run.steps" in schema and "clock.t_end" in case.given and p["clock.t_end"]:
         raise CaseError(f"clock.t_end = {p['clock.t_end']:g}: has no effect, case {case.name} runs run.steps clock "
                         "steps; allowed: 0, or set run.steps")
-    if p.get("interface.tie") == "kinematic" and p.get("interface.tie_penalty"):
-        raise CaseError(f"interface.tie_penalty = {p['interface.tie_penalty']:g}: has no effect with "
-                        "interface.tie = 'kinematic'; allowed: 0, or interface.tie = 'penalty'")
+    if p.get("coupling.tie") == "kinematic" and p.get("coupling.tie_penalty"):
+        raise CaseError(f"coupling.tie_penalty = {p['coupling.tie_penalty']:g}: has no effect with "
+                        "coupling.tie = 'kinematic'; allowed: 0, or coupling.tie = 'penalty'")
 
 
 def _parse(path: Path) -> dict:

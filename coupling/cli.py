@@ -29,6 +29,8 @@ def _parser() -> argparse.ArgumentParser:
     sub.add_parser("cases", help="list bundled cases")
     k = sub.add_parser("params", help="a case's parameters: dotted key, value, allowed range, unit, meaning")
     k.add_argument("case", help="bundled case name or path to a .toml case file")
+    sub.add_parser("schema", help="what a study case file may declare: tables, keys, allowed values, meaning "
+                   "(docs/cases.md)")
     r = sub.add_parser("run", help="run a case")
     r.add_argument("case", nargs="?", help="bundled case name or path to a .toml case file")
     # LIGGGHTS by default: the fastest path (zero-copy arrays; YADE's per-particle Python calls
@@ -98,6 +100,10 @@ def _main(argv: list[str] | None) -> int:
             return _cases()
         if args.command == "params":
             return _params(args.case)
+        if args.command == "schema":
+            from .study import document_schema
+            print(document_schema())
+            return 0
         if args.command == "run":
             return _run(args)
         if args.command == "compare":

@@ -148,14 +148,23 @@ def flatten(table: dict, prefix: str = "") -> dict[str, Any]:
     return flat
 
 
-def resolve(schema: dict[str, Param], given: dict[str, Any], where: str) -> dict[str, Any]:
+# keys that were renamed (one concept, one key): the old key is refused with the new name
+RENAMED = {"interface.tie": "coupling.tie", "interface.tie_penalty": "coupling.tie_penalty"}
+
+
+def resolve(schema: dict[str, Param], given: dict[str, Any], where: str,
+            renamed: Callable[[str], str | None] | None = None) -> dict[str, Any]:
     """Defaults overlaid with ``given`` (flat dotted keys), every value checked.
 
-    where: what supplied ``given`` ("case file x.toml", "--set"), for the error line.
+    where: what supplied ``given`` ("case file x.toml", "--set"), for the error line;
+    renamed: old key -> its new name (None if it never existed), for the error line.
     """
     unknown = sorted(set(given) - set(schema))
     if unknown:
         key = unknown[0]
+        new = RENAMED.get(key) or (renamed(key) if renamed else None)
+        if new:
+            raise CaseError(f"{key}: renamed, now {new} (in {where})")
         near = [k for k in schema if k.split(".")[-1] == key.split(".")[-1] or k.startswith(key.split(".")[0] + ".")]
         hint = f"; known keys here: {', '.join(sorted(near)[:8])}" if near else ""
         raise CaseError(f"{key}: unknown key in {where}{hint}")

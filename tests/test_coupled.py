@@ -161,7 +161,7 @@ def test_penalty_tie_converges_to_the_kinematic_tie(femdem):
     including the springs' store, is conserved."""
     errs = []
     for k in (2e7, 2e8, 2e9):
-        code, s, _ = femdem("run", "chain_consistency", "--set", "interface.tie=penalty", "--set", f"interface.tie_penalty={k}",
+        code, s, _ = femdem("run", "chain_consistency", "--set", "coupling.tie=penalty", "--set", f"coupling.tie_penalty={k}",
                             "--set", "clock.substeps=1")  # the tie alone, no subcycling error
         assert code == 0 and s["status"] == "ok"
         assert s["energy"]["balance_error_rel"] < 0.01
@@ -175,8 +175,8 @@ def test_stiff_penalty_tie_subcycled_does_not_resonate(femdem):
     interface band's elements were slow forces) stays within 1 % of energy and of the
     monolithic chain, and the automatic count subcycles it too."""
     for m in (4, 8, 0):
-        code, s, _ = femdem("run", "chain_consistency", "--set", "interface.tie=penalty",
-                            "--set", "interface.tie_penalty=2e8", "--set", f"clock.substeps={m}")
+        code, s, _ = femdem("run", "chain_consistency", "--set", "coupling.tie=penalty",
+                            "--set", "coupling.tie_penalty=2e8", "--set", f"clock.substeps={m}")
         assert code == 0, s["message"]
         assert s["energy"]["balance_error_rel"] < 0.01 and s["qoi"]["max_rel_diff_vs_monolithic"] < 0.01
     c = s["clock"]

@@ -43,7 +43,7 @@ class TestEngineConformance:
 
     def test_penalty_tie(self, femdem, engine):
         """The seed's transition contact (added forces on the engine's particles)."""
-        code, s, _ = femdem("run", "coupled_vibration", "--dem", engine, "--set", "interface.tie=penalty",
+        code, s, _ = femdem("run", "coupled_vibration", "--dem", engine, "--set", "coupling.tie=penalty",
                             "--set", "run.steps=1500")
         assert code == 0
         assert_checks(s)

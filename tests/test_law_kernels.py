@@ -48,8 +48,8 @@ def _family(name: str):
     """(LawBonds, reference positions X (n, 3), plane) of one law family as a scene builds it."""
     from coupling.case import load_case
     if name in ("ply_2d", "interface_2d"):
-        from coupling.scenes import beam_impact
-        out = beam_impact.particle_zone(load_case("beam_impact_coarse").parameters, 3e-3, True)
+        from coupling.study.assemble import particle_zone
+        out = particle_zone(load_case("beam_impact_coarse").parameters, 3e-3, tied=False, clamped=True)
         return (out[2] if name == "ply_2d" else out[3]), out[0].x, True
     if name in ("ply_3d", "interface_3d"):
         from coupling.scenes import beam_impact_3d

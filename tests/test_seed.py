@@ -11,9 +11,8 @@ DEM = {"fem": [], "coupled": ["--dem", "liggghts"], "dem": ["--dem", "liggghts"]
 from conftest import assert_checks
 
 # every strength and toughness out of reach: the same beam, elastic
-ELASTIC = [f"--set={k}=1e11" for k in ("strength.Xt", "strength.Xc", "strength.Yt", "strength.Yc", "strength.S12",
-                                         "strength.S23")] + \
-          ["--set=interface.Z0=1e10", "--set=interface.R0=1e10", "--set=interface.GIc=1e7", "--set=interface.GIIc=1e7"]
+ELASTIC = [f"--set=materials.graphite_epoxy.{k}=1e11" for k in ("Xt", "Xc", "Yt", "Yc", "S12", "S23")] + \
+          [f"--set=interfaces.table1.{k}" for k in ("Z0=1e10", "R0=1e10", "GIc=1e7", "GIIc=1e7")]
 
 
 def test_beam_impact_coarse(femdem, tmp_path):
@@ -49,11 +48,11 @@ BEAM_GEOMETRY = dict(span=st.floats(20e-3, 40e-3), radius=st.floats(3e-3, 8e-3),
 @given(**BEAM_GEOMETRY)
 def test_beam_impact_checks_hold_over_its_ranges(femdem, span, radius, velocity, mass, zone):
     """Seed 5.1 with damage, coupled, anywhere in its documented geometric and impact ranges
-    (`femdem params beam_impact`): its checks (the ledger closes; the peak deflection near the
+    (cases/seed/beam_impact.toml [ranges]): its checks (the ledger closes; the peak deflection near the
     spring-mass estimate) pass (issue #22)."""
-    code, s, err = femdem("run", "beam_impact_coarse", f"--set=geometry.half_span={span}",
-                          f"--set=impactor.radius={radius}", f"--set=impactor.velocity={velocity}",
-                          f"--set=impactor.mass_per_width={mass}", f"--set=dem.half_width={zone * span}")
+    code, s, err = femdem("run", "beam_impact_coarse", f"--set=geometry.span={2 * span}",
+                          f"--set=impactors.cylinder.radius={radius}", f"--set=impactors.cylinder.velocity={velocity}",
+                          f"--set=impactors.cylinder.mass_per_width={mass}", f"--set=zone.half_width={zone * span}")
     assert code == 0, err
     assert_checks(s)
 
@@ -62,22 +61,22 @@ def test_beam_impact_checks_hold_over_its_ranges(femdem, span, radius, velocity,
 @settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(**BEAM_GEOMETRY, mode=st.sampled_from(["coupled", "fem", "dem"]))
 def test_beam_impact_checks_hold_over_wide_samples(femdem, span, radius, velocity, mass, zone, mode):
-    zone_set = [f"--set=dem.half_width={zone * span}"] if mode == "coupled" else []
-    code, s, err = femdem("run", "beam_impact_coarse", "--mode", mode, *DEM[mode], f"--set=geometry.half_span={span}",
-                          f"--set=impactor.radius={radius}", f"--set=impactor.velocity={velocity}",
-                          f"--set=impactor.mass_per_width={mass}", *zone_set)
+    zone_set = [f"--set=zone.half_width={zone * span}"] if mode == "coupled" else []
+    code, s, err = femdem("run", "beam_impact_coarse", "--mode", mode, *DEM[mode], f"--set=geometry.span={2 * span}",
+                          f"--set=impactors.cylinder.radius={radius}", f"--set=impactors.cylinder.velocity={velocity}",
+                          f"--set=impactors.cylinder.mass_per_width={mass}", *zone_set)
     assert code == 0, err
     assert_checks(s)
 
 
 def coupled_against_fem(femdem, span, radius, velocity, mass, zone):
     """Peak centre deflections of the elastic seed beam, coupled / all-FEM - 1."""
-    sets = [*ELASTIC, f"--set=geometry.half_span={span}", f"--set=impactor.radius={radius}",
-            f"--set=impactor.velocity={velocity}", f"--set=impactor.mass_per_width={mass}",
+    sets = [*ELASTIC, f"--set=geometry.span={2 * span}", f"--set=impactors.cylinder.radius={radius}",
+            f"--set=impactors.cylinder.velocity={velocity}", f"--set=impactors.cylinder.mass_per_width={mass}",
             f"--set=clock.t_end={0.15e-3 * (span / 25e-3) ** 2}"]  # past the peak
     peaks = {}
     for mode in ("fem", "coupled"):
-        zone_set = [f"--set=dem.half_width={zone * span}"] if mode == "coupled" else []
+        zone_set = [f"--set=zone.half_width={zone * span}"] if mode == "coupled" else []
         code, s, err = femdem("run", "beam_impact_coarse", "--mode", mode, *sets, *zone_set)
         assert code == 0, err
         peaks[mode] = s["qoi"]["peak_centre_displacement"]

@@ -22,10 +22,10 @@ from .fem import fem_guards
 
 # parameters every coupled scene takes (spread into its PARAMETERS)
 COUPLING: dict[str, Param] = {
-    "interface.tie": Param("kinematic", "tie scheme: kinematic (interface particles slaved to the FEM) or "
+    "coupling.tie": Param("kinematic", "tie scheme: kinematic (interface particles slaved to the FEM) or "
                            "penalty (springs to their host points, the seed paper's transition contact)",
                            kind="str", choices=("kinematic", "penalty")),
-    "interface.tie_penalty": Param(0.0, "penalty tie stiffness per particle; 0 = 4 x the stiffest bond", unit="N/m", low=0.0),
+    "coupling.tie_penalty": Param(0.0, "penalty tie stiffness per particle; 0 = 4 x the stiffest bond", unit="N/m", low=0.0),
 }
 
 
@@ -39,7 +39,7 @@ def coupled_simulation(p: dict, make_fem: Callable[[np.ndarray | None], Explicit
         itf = TransitionInterface.build(fem.region, scene.x, scene.groups.get("interface", np.zeros(0, int)))
     except InterfaceError as exc:
         raise CaseError(f"interface: {exc}") from None
-    if p["interface.tie"] == "kinematic":
+    if p["coupling.tie"] == "kinematic":
         if not scene.placeholder_bonds:
             # the FEM carries the band's stiffness (placeholder bonds carry none and must
             # stay: without them an engine adds contact between overlapping law pairs)
@@ -61,12 +61,12 @@ def coupled_simulation(p: dict, make_fem: Callable[[np.ndarray | None], Explicit
 
 def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, steps, models):
     backend.build(scene)
-    if p["interface.tie"] == "kinematic":
+    if p["coupling.tie"] == "kinematic":
         tie = KinematicTie(itf, backend, scene.mass)
     else:
         if not hasattr(backend, "add_forces"):
             raise NotImplementedError("the penalty tie needs added particle forces, not available on this engine yet")
-        tie = PenaltyTie(itf, backend, scene.mass, p["interface.tie_penalty"] or 4 * float(scene.kn.max()))
+        tie = PenaltyTie(itf, backend, scene.mass, p["coupling.tie_penalty"] or 4 * float(scene.kn.max()))
     dt_fem, dt_dem = fem.critical_dt(), min(backend.critical_dt(), tie.critical_dt(fem.m),
                                             models_critical_dt(models, scene))
     # 0 = automatic: as many substeps as the FEM step allows (with the interface band's

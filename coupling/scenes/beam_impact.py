@@ -1,4 +1,8 @@
-"""beam_impact: the seed paper's example 5.1, a clamped [0_6/90_4/0_6] graphite/epoxy beam
+"""The base of beam_impact_3d (its parameters, laminate, evaluation and plots). The 2D case
+itself is now a study, cases/seed/beam_impact.toml; this module goes when beam_impact_3d
+becomes one (issue #23).
+
+beam_impact: the seed paper's example 5.1, a clamped [0_6/90_4/0_6] graphite/epoxy beam
 struck along its centre line by a rigid cylinder (2D plane strain, half model by symmetry;
 the 3D variant is beam_impact_3d).
 

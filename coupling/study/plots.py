@@ -1,0 +1,69 @@
+"""A study's standard plots: every probe's history (with its check's reference), and the
+damage pictures of the particle zone."""
+from __future__ import annotations
+
+import numpy as np
+
+from .closed_forms import CLOSED_FORMS
+from .schema import section
+
+_UNIT = {"point_displacement": ("mm", 1e3), "contact_force": ("kN", 1e-3), "delamination": ("mm", 1e3),
+         "ply_cracks": ("bonds", 1.0), "zone_edge_damage": ("", 1.0)}
+
+
+def histories(study, p: dict, h: dict, qoi: dict, plots_dir) -> None:
+    """histories.png: one panel per probe against time (ms); a check's reference dotted."""
+    import matplotlib.pyplot as plt
+    panels = [(n, k) for n, k in study.layout.names["probes"].items() if any(s == n or s.startswith(n + "_")
+                                                                              for s in h)]
+    if not panels:
+        return
+    time = 1e3 * np.asarray(h["time"])
+    fig, axes = plt.subplots(1, len(panels), figsize=(4.6 * len(panels), 3.8), squeeze=False)
+    for ax, (name, kind) in zip(axes[0], panels):
+        unit, scale = _UNIT.get(kind, ("", 1.0))
+        series = [s for s in h if s == name or (s.startswith(name + "_") and kind == "delamination")]
+        for s in sorted(series):
+            ax.plot(time, scale * np.asarray(h[s]), label=s if len(series) > 1 else None)
+        for check, form in study.layout.names["checks"].items():
+            if section(p, f"checks.{check}")["qoi"] in (f"peak_{name}", name):
+                ref = CLOSED_FORMS[form].reference_qoi
+                if ref in qoi:
+                    ax.axhline(scale * qoi[ref], color="k", ls=":", label=ref.replace("_", " "))
+        ax.set(xlabel="time (ms)", ylabel=f"{name.replace('_', ' ')}" + (f" ({unit})" if unit else ""))
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(plots_dir / "histories.png", dpi=120)
+    plt.close(fig)
+
+
+def damage(h: dict, plots_dir) -> None:
+    """damage_<t>us.png: particles (deformed), intralaminar bonds by damage (reds: 90 plies,
+    oranges: 0 plies), interlaminar bonds by damage (blues; full colour = debonded)."""
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import LineCollection
+    for name in sorted({k.split(".")[0] for k in h if k.startswith("damage_") and "." in k}):
+        x = 1e3 * np.asarray(h[f"{name}.x"])
+        in_90 = np.asarray(h[f"{name}.in_90"]) > 0
+        fig, ax = plt.subplots(figsize=(12, 3.2))
+        ax.plot(x[:, 0], x[:, 1], ".", ms=1.5, color="0.7")
+        for kind in ("intra", "inter"):
+            pairs = np.asarray(h[f"{name}.{kind}_pairs"]).astype(int)
+            dmg = np.asarray(h[f"{name}.{kind}_damage"])
+            hit = dmg > 0.05
+            if not hit.any():
+                continue
+            if kind == "inter":
+                colors = plt.cm.Blues(0.3 + 0.7 * dmg[hit])
+            else:
+                ninety = in_90[pairs[hit]].all(axis=1)
+                colors = np.where(ninety[:, None], plt.cm.Reds(0.3 + 0.7 * dmg[hit]),
+                                  plt.cm.Oranges(0.3 + 0.7 * dmg[hit]))
+            ax.add_collection(LineCollection(x[pairs[hit]][:, :, :2], colors=colors, linewidths=1.5))
+        ax.set(xlabel="x (mm)", ylabel="y (mm)", title=f"damage at {name.split('_')[1]}: interlaminar (blue) and "
+               "intralaminar (red: 90 plies, orange: 0 plies), darker = more damaged")
+        ax.set_aspect("equal")
+        fig.tight_layout()
+        fig.savefig(plots_dir / f"{name}.png", dpi=120)
+        plt.close(fig)

@@ -1,0 +1,290 @@
+"""The case schema: what a study file may declare, each value typed, ranged and documented.
+
+A study file is TOML in SI units. Named tables (``[materials.graphite_epoxy]``) hold a kind's
+fields; every value has one flat dotted key (``materials.graphite_epoxy.E11``), the key that
+``--set`` takes and summary.json echoes. ``femdem schema`` prints this file's tables.
+
+Sections (one concept, one key):
+- case:         description, name, t_end, modes
+- materials.*:  kind "ply" (a transversely isotropic ply: moduli, density, Hoffman strengths,
+                fracture energies)
+- interfaces.*: kind "hashin" (interlaminar law: Z0, R0, GIc, GIIc, friction)
+- laminates.*:  layup, ply_thickness, material, interface
+- geometry:     shape "beam" (a plane-strain slice of a laminated beam along x, y through the
+                thickness, centred on x = 0), its laminate, span, width, symmetry
+- mesh:         FEM elements and their sizing, graded towards the zone
+- fem:          the FEM's integration and formulation
+- zone:         the DEM damage zone: shape "box" (|x| <= half_width, the whole thickness),
+                plies_per_particle (the particle size in plies)
+- supports.*:   at "ends" (x = +-span / 2), fix "xy" (clamped) or "y" (simply supported)
+- impactors.*:  shape "cylinder" on the top face at x = 0: radius, mass_per_width, velocity,
+                penalty, friction
+- probes.*:     kind from the registry (study/probes.py), with what the run reports of them
+- checks.*:     a qoi against a closed form registered in code (study/closed_forms.py), tol
+- coupling:     the FEM-DEM tie
+- ranges:       "key" = [low, high], the verified range of a numeric key (outside: refused)
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from fem_region import materials as fem_materials
+from fem_region.region import FORMULATIONS, INTEGRATIONS
+
+from ..params import CaseError, Param, density, modulus, positive
+from ..participants.coupled import COUPLING
+
+REQUIRED = None  # a field's default when the file must give it
+
+
+def _ratio(default, doc, low=0.0, high=0.49):
+    return Param(default, doc, low=low, high=high)
+
+
+def _toughness(doc):
+    return Param(REQUIRED, doc, unit="J/m^2", low=0.0, open_low=True)
+
+
+def _strength(doc):
+    return positive(REQUIRED, doc, "Pa")
+
+
+KINDS: dict[str, dict[str, dict[str, Param]]] = {
+    "materials": {
+        "ply": {
+            "E11": modulus(REQUIRED, "modulus along the fibres"),
+            "E22": modulus(REQUIRED, "transverse modulus"),
+            "G12": modulus(REQUIRED, "in-plane shear modulus"),
+            "G23": modulus(REQUIRED, "transverse shear modulus"),
+            "nu12": _ratio(REQUIRED, "major Poisson ratio"),
+            "nu23": _ratio(REQUIRED, "transverse Poisson ratio"),
+            "rho": density(REQUIRED, "density"),
+            "Xt": _strength("tensile strength along the fibres"),
+            "Xc": _strength("compressive strength along the fibres"),
+            "Yt": _strength("transverse tensile strength"),
+            "Yc": _strength("transverse compressive strength"),
+            "S12": _strength("in-plane shear strength"),
+            "S23": _strength("transverse shear strength"),
+            "Gf_fibre": _toughness("fracture energy of a crack across the fibres"),
+            "Gf_matrix": _toughness("fracture energy of a matrix crack (along the fibres)"),
+        },
+    },
+    "interfaces": {
+        "hashin": {
+            "Z0": _strength("interlaminar normal strength (Hashin initiation)"),
+            "R0": _strength("interlaminar shear strength (Hashin initiation)"),
+            "GIc": _toughness("mode I toughness (area of the linear softening)"),
+            "GIIc": _toughness("mode II toughness"),
+            "friction": Param(0.3, "Coulomb friction of debonded faces", low=0.0, high=2.0),
+        },
+    },
+    "impactors": {
+        "cylinder": {
+            "radius": positive(REQUIRED, "cylinder radius", "m"),
+            "mass_per_width": positive(REQUIRED, "mass per metre of width", "kg/m"),
+            "velocity": positive(REQUIRED, "impact speed (downwards, on the top face at x = 0)", "m/s"),
+            "penalty": Param(0.0, "contact penalty per particle / node; 0 = the lattice's transverse bond "
+                             "stiffness E_y t", unit="N/m", low=0.0),
+            "friction": Param(0.2, "impactor friction", low=0.0, high=2.0),
+        },
+    },
+    "supports": {
+        "ends": {
+            "fix": Param("xy", "what the supports hold at x = +-span / 2: xy (clamped) or y (simply supported, "
+                         "on the bottom corner)", kind="str", choices=("xy", "y")),
+        },
+    },
+}
+# the key naming a named table's kind, and its default (a single-kind table may leave it out)
+KIND_KEY = {"materials": ("kind", "ply"), "interfaces": ("kind", "hashin"), "impactors": ("shape", "cylinder"),
+            "supports": ("at", "ends"), "probes": ("kind", None), "checks": ("closed_form", None)}
+
+LAMINATE = {
+    "layup": Param(REQUIRED, "layup, bottom up: [ANGLE_COUNT/...] with an optional repeat and s (symmetric), "
+                   "e.g. [0_6/90_4/0_6] or [0/90_2]2s; 0 and 90 plies", kind="str", check=fem_materials.parse_layup),
+    "ply_thickness": positive(REQUIRED, "ply thickness", "m"),
+    "material": Param(REQUIRED, "the plies' material (a [materials.*] name)", kind="str"),
+    "interface": Param(REQUIRED, "the law between plies of different angle (an [interfaces.*] name)", kind="str"),
+}
+
+SECTIONS: dict[str, dict[str, Param]] = {
+    "geometry": {
+        "shape": Param("beam", "beam: a plane-strain slice of a laminated beam along x, centred on x = 0",
+                       kind="str", choices=("beam",)),
+        "laminate": Param(REQUIRED, "the beam's laminate (a [laminates.*] name)", kind="str"),
+        "span": positive(REQUIRED, "distance between the supports", "m"),
+        "width": positive(REQUIRED, "width out of the slice's plane (forces are reported for the whole width)", "m"),
+        "symmetry": Param("x", "x: half model about x = 0 (the impact on the centre line)", kind="str",
+                          choices=("x",)),
+    },
+    "mesh": {
+        "element": Param("quad4", "2D element", kind="str", choices=("quad4",)),
+        "elements_along": Param(30, "FEM elements between the zone and a support", kind="int", low=2),
+        "element_ratio": Param(6.0, "largest / smallest element length, graded from the zone", low=1.0, high=100.0),
+    },
+    "fem": {
+        "integration": Param("selective", "full, or selective (shear at the centroid: no shear locking)",
+                             kind="str", choices=INTEGRATIONS),
+        "formulation": Param("linear", "small-strain linear or Total Lagrangian", kind="str", choices=FORMULATIONS),
+    },
+    "zone": {
+        "shape": Param("box", "box: |x| <= half_width through the whole thickness", kind="str", choices=("box",)),
+        "half_width": positive(REQUIRED, "half width of the DEM zone about x = 0 (coupled mode)", "m"),
+        "plies_per_particle": Param(1, "plies per particle row (the particle size is this x ply thickness)",
+                                    kind="int", low=1, high=8),
+    },
+    "coupling": {k.split(".", 1)[1]: v for k, v in COUPLING.items()},
+}
+COLLECTIONS = ("materials", "interfaces", "laminates", "impactors", "supports", "probes", "checks")
+META = {"description", "name", "t_end", "modes", "reference_elements"}
+MODES = ("coupled", "fem", "dem")
+
+
+@dataclass
+class Layout:
+    """The names a study declares: {collection: {name: kind}}, and its [case] table."""
+
+    names: dict[str, dict[str, str]]
+    meta: dict
+
+
+def is_study(data: dict) -> bool:
+    """A case file without ``[case] scene`` that declares a geometry is a study."""
+    return "geometry" in data and "scene" not in data.get("case", {})
+
+
+def parameters(data: dict, where: str, probe_kinds: dict, closed_forms: dict,
+               common: frozenset = frozenset({"clock", "output", "dem", "guards"})) -> tuple[dict[str, Param], Layout]:
+    """(dotted key -> Param with the file's values as defaults, Layout) of a study file's tables;
+    CaseError (one line) for an unknown table, key or kind, a missing required value or a
+    name that refers to nothing."""
+    meta = data.get("case", {})
+    if not isinstance(meta, dict):
+        raise CaseError(f"case: expected a table in {where}")
+    extra = set(meta) - META
+    if extra:
+        raise CaseError(f"case.{sorted(extra)[0]}: unknown key in {where}; allowed: {', '.join(sorted(META))}")
+    schema: dict[str, Param] = {}
+    names: dict[str, dict[str, str]] = {c: {} for c in COLLECTIONS}
+    for table, body in data.items():
+        if table in ("case", "ranges") or table in common:  # the run's own tables (clock, output, ...)
+            continue
+        if not isinstance(body, dict):
+            raise CaseError(f"{table} = {body!r}: expected a table in {where}")
+        if table in SECTIONS:
+            schema.update(_fields(table, SECTIONS[table], body, where))
+        elif table in COLLECTIONS:
+            for name, entry in body.items():
+                if not isinstance(entry, dict):
+                    raise CaseError(f"{table}.{name} = {entry!r}: expected a table [{table}.{name}] in {where}")
+                kind, fields = _kind(table, name, entry, probe_kinds, closed_forms)
+                names[table][name] = kind
+                schema.update(_fields(f"{table}.{name}", fields, entry, where))
+        else:
+            raise CaseError(f"[{table}]: unknown table in {where}; allowed: case, "
+                            f"{', '.join([*COLLECTIONS, *SECTIONS, *sorted(common)])}")
+    for table, fields in SECTIONS.items():  # tables left out: their defaults (or a required key missing)
+        if table not in data:
+            schema.update(_fields(table, fields, {}, where))
+    layout = Layout(names, meta)
+    _references(schema, layout, where)
+    _ranges(schema, data.get("ranges", {}), where)
+    return schema, layout
+
+
+def _ranges(schema: dict[str, Param], ranges: dict, where: str) -> None:
+    """[ranges] "key" = [low, high]: the range over which the study's checks are verified;
+    values outside it are refused like any out-of-range value."""
+    if not isinstance(ranges, dict):
+        raise CaseError(f"ranges = {ranges!r}: expected a table of \"key\" = [low, high] in {where}")
+    for key, pair in ranges.items():
+        param = schema.get(key)
+        if param is None or param.kind not in ("float", "int"):
+            raise CaseError(f"ranges.{key}: not a numeric key of this study in {where}")
+        if (not isinstance(pair, list) or len(pair) != 2 or any(isinstance(v, bool) or not isinstance(v, (int, float))
+                                                               for v in pair) or not pair[0] <= pair[1]):
+            raise CaseError(f"ranges.{key} = {pair!r}: expected [low, high] with low <= high in {where}")
+        low = max(pair[0], param.low) if param.low is not None else pair[0]
+        high = min(pair[1], param.high) if param.high is not None else pair[1]
+        ranged = Param(param.default, param.doc + " (verified range)", param.kind, param.unit, low, high,
+                       param.open_low and low == param.low, param.open_high and high == param.high,
+                       param.choices, param.plausible, param.check)
+        ranged.coerce(key, param.default)  # the file's own value inside its range
+        schema[key] = ranged
+
+
+def _kind(table: str, name: str, entry: dict, probe_kinds: dict, closed_forms: dict):
+    """(kind, {field: Param}) of one named table."""
+    key, default = KIND_KEY.get(table, (None, None))
+    if table == "laminates":
+        return "laminate", LAMINATE
+    kinds = {"probes": probe_kinds, "checks": closed_forms}.get(table) or KINDS[table]
+    kind = entry.get(key, default)
+    if kind not in kinds:
+        raise CaseError(f"{table}.{name}.{key} = {kind!r}: allowed {', '.join(repr(k) for k in kinds)}")
+    fields = kinds[kind] if table not in ("probes", "checks") else kinds[kind].fields
+    return kind, {key: Param(kind, f"what this {table[:-1]} is", kind="str", choices=tuple(kinds)), **fields}
+
+
+def _fields(prefix: str, fields: dict[str, Param], given: dict, where: str) -> dict[str, Param]:
+    unknown = sorted(set(given) - set(fields))
+    if unknown:
+        raise CaseError(f"{prefix}.{unknown[0]}: unknown key in {where}; allowed: {', '.join(fields)}")
+    out = {}
+    for field, param in fields.items():
+        key = f"{prefix}.{field}"
+        if field in given:
+            value = param.coerce(key, given[field])
+        elif param.default is REQUIRED:
+            raise CaseError(f"{key}: required in {where}; allowed: {param.allowed()} ({param.doc})")
+        else:
+            value = param.default
+        out[key] = Param(value, param.doc, param.kind, param.unit, param.low, param.high, param.open_low,
+                         param.open_high, param.choices, param.plausible, param.check)
+    return out
+
+
+def _references(schema: dict[str, Param], layout: Layout, where: str) -> None:
+    """Names that point at other tables must exist: a reference becomes a choice among them."""
+    refs = {"material": "materials", "interface": "interfaces", "laminate": "laminates", "impactor": "impactors"}
+    for key, param in list(schema.items()):
+        field = key.rsplit(".", 1)[-1]
+        if field in refs and param.kind == "str" and key.startswith(("laminates.", "geometry.", "probes.")):
+            target = refs[field]
+            allowed = tuple(layout.names[target])
+            if param.default not in allowed:
+                raise CaseError(f"{key} = {param.default!r}: no [{target}.{param.default}] in {where}; allowed: "
+                                f"{', '.join(allowed) or f'(declare a [{target}.NAME] table)'}")
+            schema[key] = Param(param.default, param.doc, "str", choices=allowed)
+
+
+def section(p: dict, prefix: str) -> dict:
+    """{field: value} of the resolved parameters under ``prefix.``."""
+    n = len(prefix) + 1
+    return {k[n:]: v for k, v in p.items() if k.startswith(prefix + ".") and "." not in k[n:]}
+
+
+def document(probe_kinds: dict, closed_forms: dict) -> str:
+    """The schema as text (``femdem schema``): every table, key, allowed values and meaning."""
+    lines = [__doc__.strip(), ""]
+
+    def table(header, fields):
+        lines.append(header)
+        for field, prm in fields.items():
+            value = "(required)" if prm.default is REQUIRED else repr(prm.default)
+            lines.append(f"  {field} = {value}  # {prm.allowed()}; {prm.doc}")
+        lines.append("")
+    lines.append("[case]\n  description, name (the run directory's), t_end (s, required), modes (default "
+                 "all of coupled, fem, dem), reference_elements (model_size_vs_reference)\n")
+    for collection in ("materials", "interfaces", "impactors", "supports"):
+        key = KIND_KEY[collection][0]
+        for kind, fields in KINDS[collection].items():
+            table(f"[{collection}.NAME]  {key} = {kind!r}", fields)
+    table("[laminates.NAME]", LAMINATE)
+    for name, sec in SECTIONS.items():
+        table(f"[{name}]", sec)
+    for kind, probe in probe_kinds.items():
+        table(f"[probes.NAME]  kind = {kind!r}: {probe.doc}", probe.fields)
+    for kind, form in closed_forms.items():
+        table(f"[checks.NAME]  closed_form = {kind!r}: {form.doc}", form.fields)
+    return "\n".join(lines)
