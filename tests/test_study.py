@@ -127,3 +127,14 @@ def test_the_study_holds_its_closed_form_for_other_materials_and_layups(femdem, 
                           f"--set=clock.t_end={0.5e-3 * (span / 40e-3) ** 2 * (130e9 / E11) ** 0.5}")
     assert code == 0, err
     assert_checks(s)
+
+
+def test_the_readme_case_file_runs(femdem, tmp_path):
+    """The case file README "Using it" shows is a working study (all-FEM, to 0.1 ms)."""
+    text = (ROOT / "README.md").read_text()
+    body = text.split("```toml\n", 1)[1].split("```", 1)[0]
+    path = tmp_path / "my_beam.toml"
+    path.write_text(body)
+    code, s, err = femdem("run", str(path), "--mode", "fem", "--set=clock.t_end=1e-4")
+    assert code == 0, err
+    assert s["qoi"]["peak_centre_displacement"] > 0 and s["checks"]["energy_balance"]["passed"]

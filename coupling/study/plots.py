@@ -19,8 +19,12 @@ def histories(study, p: dict, h: dict, qoi: dict, plots_dir) -> None:
     if not panels:
         return
     time = 1e3 * np.asarray(h["time"])
-    fig, axes = plt.subplots(1, len(panels), figsize=(4.6 * len(panels), 3.8), squeeze=False)
-    for ax, (name, kind) in zip(axes[0], panels):
+    cols = min(3, len(panels))
+    rows = -(-len(panels) // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 3.6 * rows), squeeze=False)
+    for ax in axes.flat[len(panels):]:
+        ax.set_visible(False)
+    for ax, (name, kind) in zip(axes.flat, panels):
         unit, scale = _UNIT.get(kind, ("", 1.0))
         series = [s for s in h if s == name or (s.startswith(name + "_") and kind == "delamination")]
         for s in sorted(series):
