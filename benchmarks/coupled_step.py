@@ -53,13 +53,13 @@ def families(target_bonds: float):
     """(ply LawBonds, interface LawBonds, reference positions) of a beam_impact_3d lattice
     grown to about target_bonds ply bonds."""
     from coupling.case import load_case
-    from coupling.scenes import beam_impact_3d
+    from coupling.study.assemble import particle_zone
     d = 0.6e-3  # two 0.15 mm plies per particle row
     per_column = 1.2e5 / (41 * 41)  # ply bonds per (x, y) column of the 12 x 12 mm zone (measured)
     columns = max(4, int(np.sqrt(target_bonds / per_column)))
     width = 2 * columns * d
-    case = load_case("beam_impact_3d", {"geometry.width": width, "geometry.half_span": max(0.05, 2 * columns * d)})
-    block, _, intra, inter, _ = beam_impact_3d.particle_zone(case.parameters, (columns - 1) * d, True)
+    case = load_case("beam_impact_3d", {"geometry.width": width, "geometry.span": max(0.1, 4 * columns * d)})
+    block, _, intra, inter = particle_zone(case.parameters, (columns - 1) * d, tied=False, clamped=True)
     return intra, inter, block.x
 
 

@@ -122,7 +122,8 @@ class RunOutput:
         d.mkdir(exist_ok=True)
         if not (d / "mesh.h5").exists():
             _write_atomic(d / "mesh.h5", lambda h5: (h5.create_dataset("points", data=f.points),
-                                                     [h5.create_dataset(f"cells/{k}", data=v) for k, v in f.cells.items()]))
+                                                     [h5.create_dataset(f"cells/{n:03d}:{k}", data=v)
+                                                      for n, (k, v) in enumerate(f.cells.items())]))
 
         def fill(h5):
             h5.attrs["time"] = t
@@ -142,7 +143,9 @@ class RunOutput:
         if not files:
             return
         with h5py.File(d / "mesh.h5", "r") as h5:
-            points, cells = h5["points"][:], {k: v[:] for k, v in h5["cells"].items()}
+            # blocks in the frame's order (HDF5 lists keys sorted: the index prefix keeps the order
+            # the cell data follows)
+            points, cells = h5["points"][:], {k.split(":")[-1]: h5["cells"][k][:] for k in sorted(h5["cells"])}
         with _cwd(self.dir), meshio.xdmf.TimeSeriesWriter("fields.xdmf") as w:
             w.write_points_cells(points, cells)
             for f in files:

@@ -24,6 +24,28 @@ def test_chain_consistency_matches_monolithic(femdem, sets):
     assert s["memory_peak_mb"]["orchestrator"] > 10  # the interpreter alone takes more
 
 
+@pytest.mark.parametrize("mode", ["coupled", "fem", "dem"])
+def test_summary_lists_the_steps_stages_in_order_and_they_make_the_buckets(femdem, mode):
+    """summary.json "stages": the clock step's named stages in running order (a coupled step:
+    the engine's step with laws, interface.read, fem.forces, fem.kick_drift, interface.write
+    inside its hook); each bucket of timing_s is at least the sum of its stages' times."""
+    code, s, err = femdem("run", "beam_impact_coarse", "--mode", mode, "--set=clock.t_end=2e-5")
+    assert code == 0, err
+    names = [st["name"] for st in s["stages"]]
+    if mode == "coupled":
+        assert names[0].startswith("engine.step x ")
+        assert names[1:] == ["laws", "interface.read", "fem.forces", "fem.kick_drift", "interface.write"]
+        assert all(st.get("within") == names[0] for st in s["stages"][1:])
+    elif mode == "fem":
+        assert names == ["fem.kick_drift", "fem.forces", "fem.kick"]
+    else:
+        assert names == ["engine.step", "laws"]
+    for timer in {st["timer"] for st in s["stages"]}:
+        staged = sum(st["s"] for st in s["stages"] if st["timer"] == timer)
+        assert s["timing_s"][timer] >= staged - s["timing_s"].get("transport", 0.0) - 1e-9
+    assert all(st["s"] >= 0 for st in s["stages"])
+
+
 def test_engine_without_its_environment_is_refused_clearly(femdem, monkeypatch):
     """A worker engine whose environment is missing: one line with the fix, exit 2."""
     from pathlib import Path

@@ -52,8 +52,8 @@ def _family(name: str):
         out = particle_zone(load_case("beam_impact_coarse").parameters, 3e-3, tied=False, clamped=True)
         return (out[2] if name == "ply_2d" else out[3]), out[0].x, True
     if name in ("ply_3d", "interface_3d"):
-        from coupling.scenes import beam_impact_3d
-        out = beam_impact_3d.particle_zone(load_case("beam_impact_3d_coarse").parameters, 2.4e-3, True)
+        from coupling.study.assemble import particle_zone
+        out = particle_zone(load_case("beam_impact_3d_coarse").parameters, 2.4e-3, tied=False, clamped=True)
         return (out[2] if name == "ply_3d" else out[3]), out[0].x, False
     n, h = 8, 1e-3
     X = np.array([[c * h, y, 0.0] for c in range(n) for y in (0.0, h)])

@@ -115,13 +115,13 @@ def test_beam_impact_3d_coarse(femdem):
     """Seed 5.1 in 3D (a quarter of a 3 mm strip, free edges, 3D ply lattice zone, Hex8
     around it): its checks pass (ledger, spring-mass estimate); both 0/90 interfaces are
     damaged; each interface's debonded length lies inside its damaged length, which lies inside
-    the DEM zone (2 x dem.half_width over the whole beam), and its area inside the zone's."""
+    the DEM zone (2 x zone.half_width over the whole beam), and its area inside the zone's."""
     code, s, err = femdem("run", "beam_impact_3d_coarse", "--dem", "liggghts")
     assert code == 0, err
     assert_checks(s)
     q = s["qoi"]
     assert q["damaged_interface_length_0"] > 0 and q["damaged_interface_length_1"] > 0
-    zone, W = 2 * s["parameters"]["dem.half_width"], s["parameters"]["geometry.width"]
+    zone, W = 2 * s["parameters"]["zone.half_width"], s["parameters"]["geometry.width"]
     for k in (0, 1):
         assert 0.0 <= q[f"delamination_length_{k}"] <= q[f"damaged_interface_length_{k}"] <= zone * (1 + 1e-9)
         assert 0.0 <= q[f"delamination_area_{k}"] <= zone * W * (1 + 1e-9)

@@ -5,6 +5,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
+
 import pytest
 from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
@@ -138,3 +140,93 @@ def test_the_readme_case_file_runs(femdem, tmp_path):
     code, s, err = femdem("run", str(path), "--mode", "fem", "--set=clock.t_end=1e-4")
     assert code == 0, err
     assert s["qoi"]["peak_centre_displacement"] > 0 and s["checks"]["energy_balance"]["passed"]
+
+
+class _OneElement:
+    """A one-element region as FemIndices reads it: reference nodes X and connectivity."""
+
+    def __init__(self, dim):
+        import itertools
+        self.X = np.array(list(itertools.product((0.0, 1e-3), repeat=dim)), float)[:, ::-1]
+        self.mesh = type("M", (), {"t": np.arange(2**dim)[:, None]})()
+
+
+def _laminate(angle):
+    from coupling.study.assemble import Laminate
+    ply = dict(E11=140e9, E22=9e9, G12=5e9, G23=3.2e9, nu12=0.3, nu23=0.4, rho=1500.0, Xt=1.6e9, Xc=1.2e9, Yt=50e6,
+               Yc=200e6, S12=80e6, S23=60e6, Gf_fibre=4e4, Gf_matrix=300.0)
+    return Laminate([angle], [1], 2e-3, ply, dict(Z0=40e6, R0=25e6, GIc=200.0, GIIc=600.0, friction=0.3))
+
+
+@pytest.mark.parametrize("angle", [0.0, 90.0])
+@given(scale=st.floats(0.1, 2.0))
+@settings(max_examples=5, deadline=None)
+def test_fem_failure_indices_are_the_seed_criteria(angle, scale):
+    """3D: a uniaxial stress of scale x the strength along the fibres gives Hoffman scale^2 +
+    its linear term (1 at the strength), and no interlaminar index; an interlaminar shear of
+    scale x R0 gives Hashin scale^2. 2D slice: a shear strain gamma gives Hashin
+    (G gamma / R0)^2 with G = G12 in a 0 ply, G23 in a 90 ply (the slice's x-y plane)."""
+    from coupling.study.fields import FemIndices
+    lam = _laminate(angle)
+    fi = FemIndices(_OneElement(3), lam, 3)
+    S = np.linalg.inv(fi.C[0])
+    fibre = [1.0, 0, 0, 0, 0, 0] if angle == 0 else [0, 1.0, 0, 0, 0, 0]
+    sigma = scale * lam.ply["Xt"] * np.array(fibre)
+    hashin, hoff = fi((S @ sigma)[None])
+    Xt, Xc = lam.ply["Xt"], lam.ply["Xc"]
+    expect = (scale * Xt) ** 2 / (Xt * Xc) + (1 / Xt - 1 / Xc) * scale * Xt
+    assert hoff[0] == pytest.approx(expect, rel=1e-9) and hashin[0] == pytest.approx(0.0, abs=1e-12)
+    shear = scale * lam.interface["R0"] * np.array([0, 0, 0, 0, 1.0, 0])  # xz: across the ply normal z
+    hashin, _ = fi((S @ shear)[None])
+    assert hashin[0] == pytest.approx(scale**2, rel=1e-9)
+    fi2 = FemIndices(_OneElement(2), lam, 2)
+    gamma = scale * lam.interface["R0"] / 5e9
+    hashin, _ = fi2(np.array([[0.0, 0.0, gamma]]))
+    G = lam.ply["G12"] if angle == 0 else lam.ply["G23"]
+    assert hashin[0] == pytest.approx((G * gamma / lam.interface["R0"]) ** 2, rel=1e-9)
+
+
+def _xdmf_last_frame(path: Path):
+    """(mixed topology array, {name: array} of the last time step) of a meshio XDMF time series
+    (read here: meshio's reader does not know the quadratic edges the bonds are written as)."""
+    import xml.etree.ElementTree as ET
+    import h5py
+    domain = ET.parse(path).getroot().find("Domain")
+    mesh = next(g for g in domain.findall("Grid") if g.get("Name") == "mesh")
+    grids = next(g for g in domain.findall("Grid") if g.get("GridType") == "Collection").findall("Grid")
+
+    def read(item):
+        name, key = item.text.strip().split(":")
+        with h5py.File(path.parent / name, "r") as h5:
+            return h5[key][:]
+    topology = read(mesh.find("Topology").find("DataItem"))
+    last = grids[-1]
+    return topology, {a.get("Name"): read(a.find("DataItem")) for a in last.findall("Attribute")}
+
+
+def test_fields_show_the_whole_structure(femdem, tmp_path):
+    """fields.xdmf of a coupled run: FEM cells with strain, stress and both failure indices,
+    particles with velocity, ply, damage and broken bonds, interlaminar bonds as edges; zone 0
+    on the FEM, 1 on the zone; a particle's damage is at least that of each of its bonds."""
+    code, s, err = femdem("run", "beam_impact_coarse", "--set=clock.t_end=1.5e-4", "--set=output.field_frames=3")
+    assert code == 0, err
+    topology, data = _xdmf_last_frame(tmp_path / "run0" / "fields.xdmf")
+    assert {"displacement", "velocity", "radius", "ply", "broken_bonds", "zone", "strain", "stress",
+            "interlaminar_index", "hoffman_index", "damage", "debonded"} <= set(data)
+    n_el, n_p, n_nodes = s["counts"]["fem_elements"], s["counts"]["particles"], s["counts"]["fem_nodes"]
+    n_b = len(data["zone"]) - n_el - n_p
+    assert n_b > 0
+    zone = data["zone"]
+    assert np.all(zone[:n_el] == 0) and np.all(zone[n_el:] == 1)
+    assert np.all(data["interlaminar_index"][:n_el] >= 0) and np.isfinite(data["hoffman_index"][:n_el]).all()
+    edges = topology[-4 * n_b:].reshape(n_b, 4)  # [Edge_3 = 34, end a, end b, midpoint]
+    assert np.all(edges[:, 0] == 34)
+    ends = edges[:, 1:3] - n_nodes
+    assert ends.min() >= 0 and ends.max() < n_p
+    particle_damage, bond_damage = data["damage"][n_el:n_el + n_p], data["damage"][n_el + n_p:]
+    for k in (0, 1):
+        assert np.all(particle_damage[ends[:, k]] >= bond_damage - 1e-15)
+    assert particle_damage.max() > 0  # the impact has damaged bonds by 0.15 ms
+    mid = edges[:, 3]
+    u = data["displacement"]
+    np.testing.assert_allclose(u[mid], 0.5 * (u[edges[:, 1]] + u[edges[:, 2]]), rtol=1e-12, atol=1e-18)

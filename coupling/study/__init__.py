@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..params import CaseError
-from . import closed_forms, probes
+from . import closed_forms, fields, probes
 from .assemble import beam
 from .schema import MODES, document, parameters
 
@@ -37,6 +37,14 @@ class Study:
         if isinstance(ref, bool) or not isinstance(ref, int) or ref < 0:
             raise CaseError(f"case.reference_elements = {ref!r}: allowed an integer >= 0 (0: none)")
         self.reference_elements = ref
+        shape = self.PARAMETERS["geometry.shape"].default
+        want = {"beam": ("x", "quad4"), "beam_3d": ("xy", "hex8")}[shape]
+        for key, value in zip(("geometry.symmetry", "mesh.element"), want):
+            if self.PARAMETERS[key].default != value:
+                raise CaseError(f"{key} = {self.PARAMETERS[key].default!r}: geometry.shape = {shape!r} takes {value!r}")
+        if shape == "beam" and "elements_width" in data.get("mesh", {}):
+            raise CaseError("mesh.elements_width: has no effect on a beam slice; allowed: leave it out, or "
+                            "geometry.shape = 'beam_3d'")
         for name_, kind in self.layout.names["checks"].items():
             qoi = self.PARAMETERS[f"checks.{name_}.qoi"].default
             if not any(p in qoi for p in self.layout.names["probes"]):
@@ -57,6 +65,7 @@ class Study:
         sim.probes["model_size"] = lambda: size  # elements + particles
         if built.lattice is not None:
             _damage_snapshots(sim, built)
+        sim.fields = fields.frames(built)  # the whole structure (study/fields.py)
         return sim
 
     def evaluate(self, p: dict, history: dict, mode: str):
@@ -77,12 +86,37 @@ def _damage_snapshots(sim, built) -> None:
     lat, intra, inter, backend = built.lattice, built.intra, built.inter, built.backend
     in_90 = (np.array(built.lam.angles)[lat.ply] == 90).astype(float)
     t_end = sim.n_steps * sim.dt
+    far = _far_field(built)
+    if built.dim == 3:
+        j = lat.index[:, 1].astype(float)
+        for t_snap in (t_end / 6, t_end):
+            sim.snapshots[f"damage_{round(t_snap * 1e6)}us"] = (t_snap, lambda: {
+                **far(), "x": backend.positions(), "width_index": j, "in_90": in_90,
+                "intra_damage": intra.softened(), "inter_damage": inter.damage.copy(),
+                "intra_pairs": intra.pairs.astype(float), "inter_pairs": inter.pairs.astype(float)})
+        return
     for t_snap in (t_end / 6, t_end):
         sim.snapshots[f"damage_{round(t_snap * 1e6)}us"] = (t_snap, lambda: {
-            "x": backend.positions(), "intra_failed": intra.failed().astype(float),
+            **far(), "x": backend.positions(), "intra_failed": intra.failed().astype(float),
             "inter_failed": inter.failed().astype(float), "inter_damage": inter.damage.copy(),
             "intra_damage": intra.damage.copy(), "intra_pairs": intra.pairs.astype(float),
             "inter_pairs": inter.pairs.astype(float), "in_90": in_90})
+
+
+def _far_field(built):
+    """() -> the FEM's deformed nodes and its element edges along the axes, for the damage
+    pictures of the whole structure (empty without a FEM)."""
+    dyn = built.dyn
+    if dyn is None:
+        return lambda: {}
+    X, conn = dyn.region.X, dyn.region.mesh.t.T
+    a, b = np.triu_indices(conn.shape[1], 1)
+    edges = np.stack([conn[:, a], conn[:, b]], axis=-1).reshape(-1, 2)
+    along_axis = (np.abs(X[edges[:, 0]] - X[edges[:, 1]]) > 1e-12 * np.ptp(X)).sum(axis=1) == 1
+    edges = np.unique(np.sort(edges[along_axis], axis=1), axis=0).astype(float)
+    dim = dyn.region.dim
+    X0 = np.pad(X, ((0, 0), (0, 3 - dim)))
+    return lambda: {"fem_x": np.pad(X + dyn.state.u, ((0, 0), (0, 3 - dim))), "fem_x0": X0, "fem_edges": edges}
 
 
 def document_schema() -> str:
@@ -95,10 +129,8 @@ def renamed(key: str, study: Study) -> str | None:
     one = lambda c: next(iter(names[c]), None)
     tail = key.split(".", 1)[-1]
     if key.startswith(("material.", "strength.", "fracture.")) and one("materials"):
-        lam = study.PARAMETERS.get(f"geometry.laminate")
-        mat = study.PARAMETERS[f"laminates.{lam.default}.material"].default if lam else one("materials")
-        field = {"Gf_fibre": "Gf_fibre", "Gf_matrix": "Gf_matrix"}.get(tail, tail)
-        return f"materials.{mat}.{field}"
+        lam = study.PARAMETERS["geometry.laminate"].default
+        return f"materials.{study.PARAMETERS[f'laminates.{lam}.material'].default}.{tail}"
     if key.startswith("interface.") and one("interfaces"):
         return f"interfaces.{one('interfaces')}.{tail}"
     if key.startswith("impactor.") and one("impactors"):

@@ -4,13 +4,15 @@ the coupled assembly of the requested mode.
 Modes of one body: ``fem``, the whole body as FEM (no damage, the cheap bound); ``dem``, the
 whole body as particles (the expensive reference); ``coupled``, particles inside the zone and
 FEM outside, tied at the zone's faces. Geometry shapes: ``beam``, a plane-strain slice of a
-laminated beam along x, y through the thickness, half model about x = 0.
+laminated beam along x, y through the thickness, half model about x = 0; ``beam_3d``, a
+quarter of the beam (symmetry planes x = 0 and y = 0, mid-width), free edges at y = W / 2,
+the thickness along z; 0 plies have their fibres along x, 90 plies along y.
 
-The particle zone is a ply lattice (dem_region.ply_lattice): one particle row per
-``zone.plies_per_particle`` plies, the Hoffman intralaminar law on the bonds within a ply and
-the laminate's interface law on the bonds across plies of different angle. Particles on a
-symmetry plane or on the FEM's face stand for half a cell: half the mass, and their bonds
-along that plane half the area.
+The particle zone is a ply lattice (dem_region.ply_lattice in 2D, ply_block in 3D): one
+particle row per ``zone.plies_per_particle`` plies, the Hoffman intralaminar law on the bonds
+within a ply and the laminate's interface law on the bonds across plies of different angle.
+Particles on a symmetry plane, a free edge (3D) or the FEM's face stand for half a cell: half
+the mass, and their bonds along that plane half the area.
 """
 from __future__ import annotations
 
@@ -18,7 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from dem_region import ply_lattice
+from dem_region import ply_block, ply_lattice
 from dem_region.particle_impactor import ParticleImpactor
 from dem_region.scene import DemScene
 from fem_region import materials, mesh
@@ -29,7 +31,7 @@ from physics.law_bonds import LawBonds
 
 from ..params import CaseError
 from ..participants.coupled import coupled_simulation
-from ..participants.dem import dem_only
+from ..participants.dem import dem_only, hold_symmetry_planes
 from ..participants.fem import fem_only, make_region
 from .schema import section
 
@@ -54,6 +56,23 @@ class Laminate:
         C = materials.orthotropic(m["E11"], m["E22"], m["E22"], m["nu12"], m["nu12"], m["nu23"], m["G12"], m["G12"],
                                   m["G23"])
         return materials.plane_strain(materials.rotate(C, materials.ply_axes(angle, 2)))
+
+    def C(self, angle: float) -> np.ndarray:
+        """(6, 6) Pa of a ply in the beam's axes (x span, y width, z thickness): fibres along x
+        (0) or y (90)."""
+        m = self.ply
+        C = materials.orthotropic(m["E11"], m["E22"], m["E22"], m["nu12"], m["nu12"], m["nu23"], m["G12"], m["G12"],
+                                  m["G23"])
+        return materials.rotate(C, materials.ply_axes(angle, 3))
+
+    def material(self, moduli=None) -> ply_lattice.PlyMaterial:
+        """The lattice's ply: moduli, density, Hoffman strengths (Zt = Yt, Zc = Yc, S13 = S12),
+        fracture energies; ``moduli``: the 2D slice's in-plane moduli per angle."""
+        m = self.ply
+        k = HoffmanStrengths(Xt=m["Xt"], Xc=m["Xc"], Yt=m["Yt"], Yc=m["Yc"], Zt=m["Yt"], Zc=m["Yc"], S23=m["S23"],
+                             S13=m["S12"], S12=m["S12"])
+        return ply_lattice.PlyMaterial(m["E11"], m["E22"], m["G12"], m["G23"], m["rho"], k, m["Gf_fibre"],
+                                       m["Gf_matrix"], moduli=moduli)
 
     def bending_stiffness(self) -> float:
         """D (N m) per unit width, plane strain: sum E_x,b z^2 dz about the mid-plane."""
@@ -93,8 +112,10 @@ class Built:
     mode: str
     lam: Laminate
     half_span: float
-    t: float  # slice thickness (out of plane) = particle size, m
+    t: float  # particle size, m (and the 2D slice's thickness out of plane)
     width_factor: float
+    dim: int = 2
+    column: np.ndarray | None = None  # (n,) each particle's column index along x (0 on x = 0)
     lattice: ply_lattice.PlyLattice | None = None
     intra: LawBonds | None = None
     inter: LawBonds | None = None
@@ -106,25 +127,39 @@ class Built:
 
 
 def beam_of(p: dict, mode: str) -> Built:
-    """The beam's laminate and slice, before its participants exist."""
+    """The beam's laminate and particle size, before its participants exist."""
     lam = laminate(p, p["geometry.laminate"])
     k = p["zone.plies_per_particle"]
     if any(n % k for n in lam.plies):
         raise CaseError(f"zone.plies_per_particle = {k}: must divide every ply run of the laminate ({lam.plies})")
     t = k * lam.ply_thickness
+    if p["geometry.shape"] == "beam_3d":
+        return Built(p, mode, lam, 0.5 * p["geometry.span"], t, 4.0, dim=3)  # a quarter of the beam
     return Built(p, mode, lam, 0.5 * p["geometry.span"], t, 2 * p["geometry.width"] / t)  # whole width, both halves
+
+
+def _columns_across(p: dict, d: float) -> int:
+    """Particle columns across the modelled half width (3D): half the width in whole spacings."""
+    m = 0.5 * p["geometry.width"] / d
+    if abs(m - round(m)) > 1e-6 or round(m) < 1:
+        raise CaseError(f"geometry.width = {p['geometry.width']:g}: half of it must be a whole number of particle "
+                        f"spacings ({d:g} m); allowed e.g. {2 * max(1, round(m)) * d:g} m")
+    return int(round(m)) + 1
 
 
 def particle_zone(p: dict, x_end: float, tied: bool, clamped: bool):
     """(lattice, engine scene, intralaminar LawBonds, interlaminar LawBonds) of a study's beam on
     [0, x_end] (benchmarks and kernel tests take the law families from here)."""
-    return _particle_zone(beam_of(p, "dem"), x_end, tied, clamped)
+    built = beam_of(p, "dem")
+    return (_particle_block if built.dim == 3 else _particle_zone)(built, x_end, tied, clamped)
 
 
 def beam(study, p: dict, mode: str, dem: str):
-    """(Simulation, Built) of a laminated beam slice under its impactors and supports."""
+    """(Simulation, Built) of a laminated beam (slice or quarter) under its impactors and supports."""
     built = beam_of(p, mode)
-    t, L = built.t, built.half_span
+    t, L, dim = built.t, built.half_span, built.dim
+    if dim == 3:
+        _columns_across(p, t)
     t_end = study.t_end
     if mode == "fem":
         return _fem_beam(study, p, built, t_end), built
@@ -133,29 +168,36 @@ def beam(study, p: dict, mode: str, dem: str):
         raise CaseError(f"zone.half_width = {w:g}: allowed between two particle sizes ({2 * t:g} m) and 0.8 x "
                         "half the span")
     clamp = _support_fix(study, p) == "xy"
-    lat, scene, intra, inter = _particle_zone(built, w, tied=(mode == "coupled"), clamped=(mode == "dem" and clamp))
+    zone = _particle_block if dim == 3 else _particle_zone
+    lat, scene, intra, inter = zone(built, w, tied=(mode == "coupled"), clamped=(mode == "dem" and clamp))
     built.lattice, built.intra, built.inter = lat, intra, inter
+    built.column = lat.index[:, 0] if dim == 3 else lat.column
     built.end_held = mode == "coupled" or clamp
     built.impactors = {name: _particle_impactor(p, name, built) for name in study.layout.names["impactors"]}
     models = (intra, inter, *built.impactors.values())
-    axis = np.flatnonzero(lat.column == 0)
     if mode == "dem":
         sim, backend, _ = dem_only(p, scene, dem, t_end, models=models)
-        if not clamp:  # simply supported: the bottom particle of the last column
-            last = np.flatnonzero(lat.column == lat.column.max())
-            corner = last[[np.argmin(lat.x[last, 1])]]
-            backend.prescribe(corner, "y")
-            backend.set_velocities(corner, np.zeros((1, 3)))
+        if not clamp:  # simply supported: the bottom particles of the last column
+            last = np.flatnonzero(built.column == built.column.max())
+            bottom = last[lat.x[last, dim - 1] <= lat.x[last, dim - 1].min() + 1e-9 * t]
+            backend.prescribe(bottom, "yz"[dim - 2])
+            backend.set_velocities(bottom, np.zeros((len(bottom), 3)))
     else:
         def make(extra_mass):
-            region = _fem_region(p, built, lat.x[:, 0].max())
-            return ExplicitDynamics(region, supports=_fem_supports(study, p, region, L), extra_mass=extra_mass)
+            region = (_fem_block if dim == 3 else _fem_region)(p, built, lat.x[:, 0].max())
+            return ExplicitDynamics(region, supports=_fem_supports(study, p, region, L, dim, symmetry_x=False),
+                                    extra_mass=extra_mass)
         sim, clock = coupled_simulation(p, make, scene, dem, t_end, models=models)
         backend, built.dyn = clock.dem, clock.fem
         built.fem_elements = clock.fem.region.n_elements
     built.backend = backend
-    backend.prescribe(axis, "x")  # the symmetry plane
-    backend.set_velocities(axis, np.zeros((len(axis), 3)))
+    if dim == 3:
+        held = np.concatenate([scene.groups.get("interface", []), scene.groups.get("fixed", [])]).astype(int)
+        hold_symmetry_planes(backend, lat.index[:, 0], lat.index[:, 1], held)
+    else:
+        axis = np.flatnonzero(lat.column == 0)
+        backend.prescribe(axis, "x")  # the symmetry plane
+        backend.set_velocities(axis, np.zeros((len(axis), 3)))
     sim.counts.update({"law_bonds": len(intra.pairs) + len(inter.pairs)})
     return sim, built
 
@@ -167,13 +209,22 @@ def _support_fix(study, p: dict) -> str:
     return p[f"supports.{names[0]}.fix"]
 
 
-def _fem_supports(study, p: dict, region, L: float) -> list[PrescribedMotion]:
+def _fem_supports(study, p: dict, region, L: float, dim: int, symmetry_x: bool) -> list[PrescribedMotion]:
+    """The supports at x = span / 2 (clamped: every DOF of the end face; simply supported: the
+    vertical DOF of its bottom edge), the symmetry plane y = 0 (3D) and, when the FEM reaches
+    it, x = 0."""
     X = region.X
     end = np.flatnonzero(np.abs(X[:, 0] - L) < 1e-9 * L)
     if _support_fix(study, p) == "xy":
-        return [PrescribedMotion(np.concatenate([2 * end, 2 * end + 1]))]
-    corner = end[[np.argmin(X[end, 1])]]
-    return [PrescribedMotion(2 * corner + 1)]
+        out = [PrescribedMotion(np.concatenate([dim * end + c for c in range(dim)]))]
+    else:
+        bottom = end[X[end, dim - 1] < 1e-9 * L]
+        out = [PrescribedMotion(dim * bottom + dim - 1)]
+    if dim == 3:
+        out.append(PrescribedMotion(3 * np.flatnonzero(np.abs(X[:, 1]) < 1e-9 * L) + 1))
+    if symmetry_x:
+        out.append(PrescribedMotion(dim * np.flatnonzero(np.abs(X[:, 0]) < 1e-9 * L)))
+    return out
 
 
 def _fem_region(p: dict, built: Built, x0: float):
@@ -190,21 +241,44 @@ def _fem_region(p: dict, built: Built, x0: float):
     return make_region(m, p, D, lam.ply["rho"], built.t)
 
 
+def _fem_block(p: dict, built: Built, x0: float):
+    """Hex8 laminate on [x0, span / 2] x [0, W / 2] x [0, H], one element layer per particle row."""
+    lam, k = built.lam, p["zone.plies_per_particle"]
+    n = p["mesh.elements_along"]
+    ratio = p["mesh.element_ratio"] ** (1.0 / max(n - 1, 1))
+    m = mesh.box(mesh.graded(x0, built.half_span, n, ratio, x0),
+                 np.linspace(0.0, 0.5 * p["geometry.width"], p["mesh.elements_width"] + 1),
+                 np.linspace(0.0, lam.thickness, sum(lam.plies) // k + 1), "hex8")
+    run = np.searchsorted(np.cumsum(lam.plies) * lam.ply_thickness, m.p[2, m.t].mean(axis=0))
+    C = np.array([lam.C(lam.angles[b]) for b in run])
+    return make_region(m, p, C, lam.ply["rho"], 1.0)
+
+
 def _fem_beam(study, p: dict, built: Built, t_end: float):
-    """All-FEM: the impactors on the top face nodes, the symmetry plane held in x."""
-    region = _fem_region(p, built, 0.0)
-    X, L, H = region.X, built.half_span, built.lam.thickness
-    axis = np.flatnonzero(X[:, 0] < 1e-9 * L)
-    top = X[:, 1] > H - 1e-9 * H
-    h_node = np.diff(np.unique(X[top, 0])).min()
+    """All-FEM: the impactors on the top face nodes, the symmetry planes held."""
+    dim = built.dim
+    region = (_fem_block if dim == 3 else _fem_region)(p, built, 0.0)
+    X, L, H, d = region.X, built.half_span, built.lam.thickness, built.t
+    top = X[:, dim - 1] > H - 1e-9 * H
+    # the particles' penalty per particle, times a node's share of the surface in particles
+    share_x = max(1.0, np.diff(np.unique(X[top, 0])).min() / d)
+    share_y = max(1.0, 0.5 * p["geometry.width"] / p["mesh.elements_width"] / d) if dim == 3 else 1.0
     imps = {}
     for name in study.layout.names["impactors"]:
         q = section(p, f"impactors.{name}")
-        k_pen = (q["penalty"] or built.lam.transverse_modulus() * built.t) * max(1.0, h_node / built.t)
-        imps[name] = RigidImpactor("cylinder", np.array([0.0, H + q["radius"] + 1e-9]), q["radius"],
-                                   0.5 * q["mass_per_width"] * built.t, np.array([0.0, -q["velocity"]]), k_pen,
-                                   friction=q["friction"])
-    dyn = ExplicitDynamics(region, supports=[*_fem_supports(study, p, region, L), PrescribedMotion(2 * axis)],
+        if dim == 3:
+            imps[name] = RigidImpactor("cylinder", np.array([0.0, 0.0, H + q["radius"] + 1e-9]), q["radius"],
+                                       0.25 * q["mass_per_width"] * p["geometry.width"],
+                                       np.array([0.0, 0.0, -q["velocity"]]),
+                                       (q["penalty"] or built.lam.ply["E22"] * d) * share_x * share_y,
+                                       friction=q["friction"],
+                                       axis=np.array([0.0, 1.0, 0.0]))
+        else:
+            k_pen = (q["penalty"] or built.lam.transverse_modulus() * d) * share_x
+            imps[name] = RigidImpactor("cylinder", np.array([0.0, H + q["radius"] + 1e-9]), q["radius"],
+                                       0.5 * q["mass_per_width"] * d, np.array([0.0, -q["velocity"]]), k_pen,
+                                       friction=q["friction"])
+    dyn = ExplicitDynamics(region, supports=_fem_supports(study, p, region, L, dim, symmetry_x=True),
                            impactors=list(imps.values()))
     built.dyn, built.impactors, built.fem_elements = dyn, imps, region.n_elements
     return fem_only(dyn, p, t_end, {})
@@ -216,11 +290,7 @@ def _particle_zone(built: Built, x_end: float, tied: bool, clamped: bool):
     beam's end, held by a clamp if ``clamped``."""
     lam, d = built.lam, built.t
     k = round(d / lam.ply_thickness)
-    m = lam.ply
-    strengths = HoffmanStrengths(Xt=m["Xt"], Xc=m["Xc"], Yt=m["Yt"], Yc=m["Yc"], Zt=m["Yt"], Zc=m["Yc"],
-                                 S23=m["S23"], S13=m["S12"], S12=m["S12"])
-    mat = ply_lattice.PlyMaterial(m["E11"], m["E22"], m["G12"], m["G23"], m["rho"], strengths, m["Gf_fibre"],
-                                  m["Gf_matrix"], moduli={a: ply_lattice.slice_moduli(lam.D(a)) for a in set(lam.angles)})
+    mat = lam.material(moduli={a: ply_lattice.slice_moduli(lam.D(a)) for a in set(lam.angles)})
     lat = ply_lattice.build(0.0, int(round(x_end / d)) + 1, 0.0, [n // k for n in lam.plies], lam.angles, d, mat)
     last = lat.column == lat.column.max()
     on_plane = (lat.column == 0) | (last & tied)  # half cells
@@ -241,9 +311,44 @@ def _particle_zone(built: Built, x_end: float, tied: bool, clamped: bool):
     return lat, scene, intra, inter
 
 
+def _particle_block(built: Built, x_end: float, tied: bool, clamped: bool):
+    """(block, engine scene, intralaminar LawBonds, interlaminar LawBonds) on [0, x_end] x
+    [0, W / 2] x [0, H]; half cells on the symmetry planes, the free edge and (``tied``) the
+    FEM's face; the last column held by a clamp if ``clamped``."""
+    lam, d, p = built.lam, built.t, built.p
+    k = round(d / lam.ply_thickness)
+    M, N = _columns_across(p, d), int(round(x_end / d)) + 1
+    half = [(0, 0), (1, 0), (1, M - 1)] + ([(0, N - 1)] if tied else [])
+    try:
+        block = ply_block.build((0.0, 0.0, 0.0), (N, M), [n // k for n in lam.plies], lam.angles, d, lam.material(),
+                                half_planes=half)
+    except ValueError as exc:
+        material = p[f"laminates.{p['geometry.laminate']}.material"]
+        raise CaseError(f"materials.{material}.G12 = {lam.ply['G12']:g}: {exc}") from None
+    l = block.x[block.intra_pairs[:, 1]] - block.x[block.intra_pairs[:, 0]]
+    intra = LawBonds(block.intra_pairs, block.x, l, block.intra_area, block.intra_law, volume=block.volume,
+                     label="intralaminar")
+    itf = lam.interface
+    law = ply_block.interlaminar_law(block, itf["Z0"], itf["R0"], itf["GIc"], itf["GIIc"])
+    inter = LawBonds(block.inter_pairs, block.x, np.tile([0.0, 0.0, 1.0], (len(block.inter_pairs), 1)),
+                     block.inter_area, law, friction=itf["friction"], along=block.inter_along, label="interlaminar")
+    last = np.flatnonzero(block.index[:, 0] == N - 1)
+    groups = {"interface": last} if tied else {"fixed": last} if clamped else {}
+    return block, ply_block.engine_scene(block, groups=groups), intra, inter
+
+
 def _particle_impactor(p: dict, name: str, built: Built) -> ParticleImpactor:
-    """Half of the cylinder (the symmetry plane cuts it) on the top rows, its x motion held."""
+    """The part of the cylinder the symmetry planes leave (a half in 2D, a quarter in 3D) on the
+    top rows, moving only vertically."""
     q, lat, d = section(p, f"impactors.{name}"), built.lattice, built.t
+    if built.dim == 3:
+        H, R, r = built.lam.thickness, q["radius"], lat.radius
+        top = np.flatnonzero(lat.index[:, 2] >= lat.index[:, 2].max() - 1)
+        cyl = RigidImpactor("cylinder", np.array([0.0, 0.0, H - d / 2 + R + r + 1e-9]), R + r,
+                            0.25 * q["mass_per_width"] * p["geometry.width"], np.array([0.0, 0.0, -q["velocity"]]),
+                            q["penalty"] or built.lam.ply["E22"] * d, friction=q["friction"],
+                            axis=np.array([0.0, 1.0, 0.0]))
+        return ParticleImpactor(cyl, top, fixed=(True, True, False))
     R, r, H = q["radius"], lat.radius, built.lam.thickness
     k_pen = q["penalty"] or built.lam.transverse_modulus() * d
     top = np.flatnonzero(lat.row >= lat.row.max() - 1)

@@ -44,30 +44,63 @@ def histories(study, p: dict, h: dict, qoi: dict, plots_dir) -> None:
 
 def damage(h: dict, plots_dir) -> None:
     """damage_<t>us.png: particles (deformed), intralaminar bonds by damage (reds: 90 plies,
-    oranges: 0 plies), interlaminar bonds by damage (blues; full colour = debonded)."""
+    oranges: 0 plies), interlaminar bonds by damage (blues; full colour = debonded); in 3D two
+    x-z sections, mid-width (the symmetry plane) and the free edge."""
     import matplotlib.pyplot as plt
-    from matplotlib.collections import LineCollection
     for name in sorted({k.split(".")[0] for k in h if k.startswith("damage_") and "." in k}):
         x = 1e3 * np.asarray(h[f"{name}.x"])
         in_90 = np.asarray(h[f"{name}.in_90"]) > 0
-        fig, ax = plt.subplots(figsize=(12, 3.2))
-        ax.plot(x[:, 0], x[:, 1], ".", ms=1.5, color="0.7")
-        for kind in ("intra", "inter"):
-            pairs = np.asarray(h[f"{name}.{kind}_pairs"]).astype(int)
-            dmg = np.asarray(h[f"{name}.{kind}_damage"])
-            hit = dmg > 0.05
-            if not hit.any():
-                continue
-            if kind == "inter":
-                colors = plt.cm.Blues(0.3 + 0.7 * dmg[hit])
-            else:
-                ninety = in_90[pairs[hit]].all(axis=1)
-                colors = np.where(ninety[:, None], plt.cm.Reds(0.3 + 0.7 * dmg[hit]),
-                                  plt.cm.Oranges(0.3 + 0.7 * dmg[hit]))
-            ax.add_collection(LineCollection(x[pairs[hit]][:, :, :2], colors=colors, linewidths=1.5))
-        ax.set(xlabel="x (mm)", ylabel="y (mm)", title=f"damage at {name.split('_')[1]}: interlaminar (blue) and "
-               "intralaminar (red: 90 plies, orange: 0 plies), darker = more damaged")
-        ax.set_aspect("equal")
+        fem = 1e3 * np.asarray(h[f"{name}.fem_x"]) if f"{name}.fem_x" in h else None
+        if f"{name}.width_index" in h:
+            j = np.asarray(h[f"{name}.width_index"]).astype(int)
+            y_edge = x[j == j.max(), 1].max()
+            sections = [(j == 0, [0, 2], "mid-width (symmetry plane)", 0.0),
+                        (j == j.max(), [0, 2], "free edge", y_edge)]
+        else:
+            sections = [(np.ones(len(x), bool), [0, 1], "", None)]
+        wide = 12 if fem is None else 16
+        fig, axes = plt.subplots(len(sections), 1, figsize=(wide, 3.2 * len(sections)), squeeze=False)
+        for ax, (on, cols, label, plane) in zip(axes[:, 0], sections):
+            if fem is not None:
+                _far_field(ax, fem, 1e3 * np.asarray(h[f"{name}.fem_x0"]), np.asarray(h[f"{name}.fem_edges"]).astype(int),
+                           cols, plane)
+            _section(ax, h, name, x, in_90, on, cols)
+            ax.set(xlabel="x (mm)", ylabel=f"{'yz'[cols[1] - 1]} (mm)",
+                   title=f"damage at {name.split('_')[1]}" + (f", {label}" if label else ": interlaminar (blue) and "
+                   "intralaminar (red: 90 plies, orange: 0 plies), darker = more damaged")
+                   + ("; FEM far field grey" if fem is not None else ""))
+            ax.set_aspect("equal")
         fig.tight_layout()
         fig.savefig(plots_dir / f"{name}.png", dpi=120)
         plt.close(fig)
+
+
+def _far_field(ax, fem, fem0, edges, cols, plane) -> None:
+    """The FEM's deformed element edges (grey); in 3D those whose nodes lie, undeformed, in the
+    node plane y nearest the section's (mm)."""
+    from matplotlib.collections import LineCollection
+    if plane is not None:
+        ys = np.unique(fem0[:, 1])
+        at = ys[np.argmin(np.abs(ys - plane))]
+        on = np.abs(fem0[:, 1] - at) <= 1e-9 * max(np.ptp(fem0), 1.0)
+        edges = edges[on[edges].all(axis=1)]
+    ax.add_collection(LineCollection(fem[edges][:, :, cols], colors="0.75", linewidths=0.5))
+    ax.autoscale()
+
+
+def _section(ax, h, name, x, in_90, on, cols) -> None:
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import LineCollection
+    ax.plot(x[on, cols[0]], x[on, cols[1]], ".", ms=1.5, color="0.7")
+    for kind in ("intra", "inter"):
+        pairs = np.asarray(h[f"{name}.{kind}_pairs"]).astype(int)
+        dmg = np.asarray(h[f"{name}.{kind}_damage"])
+        hit = (dmg > 0.05) & on[pairs].all(axis=1)
+        if not hit.any():
+            continue
+        if kind == "inter":
+            colors = plt.cm.Blues(0.3 + 0.7 * dmg[hit])
+        else:
+            ninety = in_90[pairs[hit]].all(axis=1)
+            colors = np.where(ninety[:, None], plt.cm.Reds(0.3 + 0.7 * dmg[hit]), plt.cm.Oranges(0.3 + 0.7 * dmg[hit]))
+        ax.add_collection(LineCollection(x[pairs[hit]][:, :, cols], colors=colors, linewidths=1.5))

@@ -12,7 +12,7 @@ from typing import Callable
 
 import numpy as np
 
-from ..params import Param
+from ..params import CaseError, Param
 from .schema import section
 
 
@@ -25,12 +25,16 @@ class ProbeKind:
 
 
 def _point_series(built, name, f):
-    """Displacement component of the particle (or, without one, the FEM node) nearest (x, y)."""
-    comp, sign = "xy".index(f["component"][-1]), -1.0 if f["component"].startswith("-") else 1.0
-    at = np.array([f["x"], f["y"]])
+    """Displacement component of the particle (or, without one within a spacing, the FEM node)
+    nearest (x, y[, z])."""
+    dim = built.dim
+    comp, sign = "xyz".index(f["component"][-1]), -1.0 if f["component"].startswith("-") else 1.0
+    if comp >= dim:
+        raise CaseError(f"probes.{name}.component = {f['component']!r}: allowed x, y (2D), z (3D), with a leading -")
+    at = np.array([f["x"], f["y"], f["z"]])[:dim]
     lat = built.lattice
-    if lat is not None and np.min(np.linalg.norm(lat.x[:, :2] - at, axis=1)) <= lat.d:
-        i = int(np.argmin(np.linalg.norm(lat.x[:, :2] - at, axis=1)))
+    if lat is not None and np.min(np.linalg.norm(lat.x[:, :dim] - at, axis=1)) <= built.t:
+        i = int(np.argmin(np.linalg.norm(lat.x[:, :dim] - at, axis=1)))
         backend, x0 = built.backend, lat.x[i, comp]
         return {name: lambda: sign * float(backend.positions_of(np.array([i]))[0, comp] - x0)}
     dyn = built.dyn
@@ -45,37 +49,36 @@ def _peak_qoi(name, f, h):
 
 
 def _contact_series(built, name, f):
-    """Force of the impactor on the structure (whole width), along -y (N); its velocity (m/s)."""
-    imp, w = built.impactors[f["impactor"]], built.width_factor
+    """Force of the impactor on the structure (whole structure), upwards on it (N); its
+    vertical velocity (m/s)."""
+    imp, w, up = built.impactors[f["impactor"]], built.width_factor, built.dim - 1
     if hasattr(imp, "imp"):  # on particles: the force the particles exert on it
-        return {name: lambda: float(imp.force[1] * w), f"{f['impactor']}_velocity": lambda: float(imp.imp.v[1])}
-    return {name: lambda: float(imp.a[1] * imp.mass * w), f"{f['impactor']}_velocity": lambda: float(imp.v[1])}
-
-
-def _interfaces(built):
-    """(row of each interlaminar bond's lower particle, the distinct rows, length weights m):
-    bonds weighted by the beam length they stand for, both halves; the tied or clamped column
-    none (it is the FEM's face or the support)."""
-    lat = built.lattice
-    first = lat.inter_pairs[:, 0]
-    row, col = lat.row[first], lat.column[first]
-    weight = np.where(col == 0, 0.5, 1.0) * lat.d * 2
-    if built.end_held:
-        weight[col == lat.column.max()] = 0.0
-    return row, np.unique(row), weight
+        if built.dim == 3:
+            return {name: lambda: float(w * imp.force[up]), f"{f['impactor']}_velocity": lambda: float(imp.imp.v[up])}
+        return {name: lambda: float(imp.force[up] * w), f"{f['impactor']}_velocity": lambda: float(imp.imp.v[up])}
+    if built.dim == 3:
+        return {name: lambda: float(w * imp.a[up] * imp.mass), f"{f['impactor']}_velocity": lambda: float(imp.v[up])}
+    return {name: lambda: float(imp.a[up] * imp.mass * w), f"{f['impactor']}_velocity": lambda: float(imp.v[up])}
 
 
 def _delamination_series(built, name, f):
-    """Per ply interface k (bottom up): debonded length and damaged (d > 0) length (m)."""
+    """Per ply interface k (bottom up), over the whole structure: debonded area (m^2), and the
+    debonded and damaged (d > 0) lengths, area / width (m). The tied or clamped column is not
+    counted (it is the FEM's face or the support)."""
     if built.inter is None:
         return {}
-    inter = built.inter
-    row, rows, weight = _interfaces(built)
+    inter, W = built.inter, built.p["geometry.width"]
+    first = inter.pairs[:, 0]
+    layer = built.lattice.x[first, built.dim - 1]
+    area = built.width_factor * inter.area
+    if built.end_held:
+        area = np.where(built.column[first] == built.column.max(), 0.0, area)
     out = {}
-    for k, r in enumerate(rows):
-        sel = row == r
-        out[f"{name}_length_{k}"] = lambda sel=sel: float(weight[sel] @ inter.failed()[sel])
-        out[f"damaged_interface_length_{k}"] = lambda sel=sel: float(weight[sel] @ (inter.damage[sel] > 0))
+    for k, z in enumerate(np.unique(layer)):
+        sel = layer == z
+        out[f"{name}_area_{k}"] = lambda sel=sel: float(area[sel] @ inter.failed()[sel])
+        out[f"{name}_length_{k}"] = lambda sel=sel: float(area[sel] @ inter.failed()[sel]) / W
+        out[f"damaged_interface_length_{k}"] = lambda sel=sel: float(area[sel] @ (inter.damage[sel] > 0)) / W
     return out
 
 
@@ -103,8 +106,8 @@ def _zone_edge_series(built, name, f):
     near 1, the damage reached the edge and the zone must widen."""
     if built.inter is None:
         return {}
-    lat, inter = built.lattice, built.inter
-    edge = lat.column[lat.inter_pairs[:, 0]] >= lat.column.max() - f["columns"]
+    inter, column = built.inter, built.column
+    edge = column[inter.pairs[:, 0]] >= column.max() - f["columns"]
     return {name: lambda: float(inter.damage[edge].max()) if edge.any() else 0.0}
 
 
@@ -112,21 +115,22 @@ def _max_qoi(name, f, h):
     return {name: float(np.max(h[name]))} if name in h else {}
 
 
-_COMPONENTS = ("x", "y", "-x", "-y")
+_COMPONENTS = ("x", "y", "z", "-x", "-y", "-z")
 PROBES: dict[str, ProbeKind] = {
     "point_displacement": ProbeKind(
         "displacement of the material point nearest (x, y); qoi peak_NAME, time_of_peak_NAME",
         {"x": Param(0.0, "x of the point", unit="m"), "y": Param(0.0, "y of the point", unit="m"),
-         "component": Param("-y", "component (a leading - reverses it)", kind="str", choices=_COMPONENTS)},
+         "z": Param(0.0, "z of the point (3D)", unit="m"),
+         "component": Param("-y", "component (a leading - reverses it); z in 3D", kind="str", choices=_COMPONENTS)},
         _point_series, _peak_qoi),
     "contact_force": ProbeKind(
         "force between an impactor and the structure (whole width), and the impactor's velocity; qoi peak_NAME",
         {"impactor": Param("", "the impactor (an [impactors.*] name)", kind="str")},
         _contact_series, lambda name, f, h: {f"peak_{name}": float(np.max(h[name]))}),
     "delamination": ProbeKind(
-        "debonded (NAME_length_K) and damaged (damaged_interface_length_K) length of each ply interface K, "
-        "bottom up, whole beam; qoi: their final values",
-        {}, _delamination_series, _final_qoi(("{name}_length_", "damaged_interface_length_"))),
+        "debonded area (NAME_area_K), debonded and damaged lengths (NAME_length_K, damaged_interface_length_K: "
+        "area / width) of each ply interface K, bottom up, whole structure; qoi: their final values",
+        {}, _delamination_series, _final_qoi(("{name}_area_", "{name}_length_", "damaged_interface_length_"))),
     "ply_cracks": ProbeKind(
         "failed intralaminar bonds in the plies of one angle (or all); qoi: the final count",
         {"angle": Param("90", "ply angle, or all", kind="str", choices=("0", "90", "all"))},

@@ -11,7 +11,8 @@ Sections (one concept, one key):
 - interfaces.*: kind "hashin" (interlaminar law: Z0, R0, GIc, GIIc, friction)
 - laminates.*:  layup, ply_thickness, material, interface
 - geometry:     shape "beam" (a plane-strain slice of a laminated beam along x, y through the
-                thickness, centred on x = 0), its laminate, span, width, symmetry
+                thickness, centred on x = 0) or "beam_3d" (a quarter of it, the thickness along
+                z), its laminate, span, width, symmetry
 - mesh:         FEM elements and their sizing, graded towards the zone
 - fem:          the FEM's integration and formulation
 - zone:         the DEM damage zone: shape "box" (|x| <= half_width, the whole thickness),
@@ -109,18 +110,21 @@ LAMINATE = {
 
 SECTIONS: dict[str, dict[str, Param]] = {
     "geometry": {
-        "shape": Param("beam", "beam: a plane-strain slice of a laminated beam along x, centred on x = 0",
-                       kind="str", choices=("beam",)),
+        "shape": Param("beam", "beam: a plane-strain slice of a laminated beam along x, centred on x = 0; "
+                       "beam_3d: a quarter of it (x = 0 and mid-width y = 0 symmetry planes), thickness along z",
+                       kind="str", choices=("beam", "beam_3d")),
         "laminate": Param(REQUIRED, "the beam's laminate (a [laminates.*] name)", kind="str"),
         "span": positive(REQUIRED, "distance between the supports", "m"),
         "width": positive(REQUIRED, "width out of the slice's plane (forces are reported for the whole width)", "m"),
-        "symmetry": Param("x", "x: half model about x = 0 (the impact on the centre line)", kind="str",
-                          choices=("x",)),
+        "symmetry": Param("x", "the symmetry planes: x (beam: half model about x = 0) or xy (beam_3d: also "
+                          "mid-width y = 0)", kind="str", choices=("x", "xy")),
     },
     "mesh": {
-        "element": Param("quad4", "2D element", kind="str", choices=("quad4",)),
+        "element": Param("quad4", "element: quad4 (beam) or hex8 (beam_3d)", kind="str", choices=("quad4", "hex8")),
         "elements_along": Param(30, "FEM elements between the zone and a support", kind="int", low=2),
         "element_ratio": Param(6.0, "largest / smallest element length, graded from the zone", low=1.0, high=100.0),
+        "elements_width": Param(4, "Hex8 elements across the modelled half width (beam_3d)", kind="int", low=1,
+                                high=200),
     },
     "fem": {
         "integration": Param("selective", "full, or selective (shear at the centroid: no shear locking)",
