@@ -338,3 +338,25 @@ def test_film_closed_form_tends_to_rigid_clamps_for_a_stiff_ply():
     assert ratio(p) < 1
     assert ratio({**p, "material.G12": 1e6 * p["material.G12"]}) == pytest.approx(1, rel=5e-3)
     assert ratio({**p, "geometry.sublaminate_plies": 8}) < ratio(p)
+
+
+PLY_RANGES = dict(E11=st.floats(80e9, 200e9), E22=st.floats(6e9, 12e9), G12=st.floats(3e9, 7e9),
+                  nu12=st.floats(0.2, 0.35), rho=st.floats(1400.0, 1800.0))
+
+
+@settings(max_examples=2, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.generate],
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(**PLY_RANGES)
+def test_beam_impact_coupled_equals_fem_over_ply_materials(femdem, E11, E22, G12, nu12, rho):
+    """The seed beam with another ply (issue #22: the seed cases' materials), elastic: coupled
+    and all-FEM peak centre deflections within 3 %, to past the peak (it scales with
+    sqrt(rho / E11))."""
+    mats = [f"--set=materials.graphite_epoxy.{k}={v}" for k, v in
+            dict(E11=E11, E22=E22, G12=G12, G23=E22 / 2.8, nu12=nu12, rho=rho).items()]
+    t_end = 0.15e-3 * np.sqrt((rho / 1540.0) * (156e9 / E11))
+    peaks = {}
+    for mode in ("fem", "coupled"):
+        code, s, err = femdem("run", "beam_impact_coarse", "--mode", mode, *ELASTIC, *mats, f"--set=clock.t_end={t_end}")
+        assert code == 0, err
+        peaks[mode] = s["qoi"]["peak_centre_displacement"]
+    assert abs(peaks["coupled"] / peaks["fem"] - 1) < 0.03, peaks

@@ -11,7 +11,7 @@ import numpy as np
 
 from ..params import CaseError
 from . import closed_forms, fields, probes
-from .assemble import beam
+from .assemble import beam, plate
 from .schema import MODES, document, parameters
 
 __all__ = ["Study", "document_schema", "renamed"]
@@ -38,7 +38,15 @@ class Study:
             raise CaseError(f"case.reference_elements = {ref!r}: allowed an integer >= 0 (0: none)")
         self.reference_elements = ref
         shape = self.PARAMETERS["geometry.shape"].default
-        want = {"beam": ("x", "quad4"), "beam_3d": ("xy", "hex8")}[shape]
+        want = {"beam": ("x", "quad4"), "beam_3d": ("xy", "hex8"), "plate": ("xy", "hex8")}[shape]
+        at = {"plate": "edges"}.get(shape, "ends")
+        for name_, kind in self.layout.names["supports"].items():
+            if kind != at:
+                raise CaseError(f"supports.{name_}.at = {kind!r}: geometry.shape = {shape!r} is supported at its {at}")
+        shapes = {"plate": ("sphere",)}.get(shape, ("cylinder",))
+        for name_, kind in self.layout.names["impactors"].items():
+            if kind not in shapes:
+                raise CaseError(f"impactors.{name_}.shape = {kind!r}: geometry.shape = {shape!r} takes {shapes[0]!r}")
         for key, value in zip(("geometry.symmetry", "mesh.element"), want):
             if self.PARAMETERS[key].default != value:
                 raise CaseError(f"{key} = {self.PARAMETERS[key].default!r}: geometry.shape = {shape!r} takes {value!r}")
@@ -59,7 +67,7 @@ class Study:
             or key in ("geometry.shape", "zone.shape", "geometry.symmetry")
 
     def build(self, p: dict, mode: str, dem: str):
-        sim, built = beam(self, p, mode, dem)
+        sim, built = (plate if p["geometry.shape"] == "plate" else beam)(self, p, mode, dem)
         sim.probes.update(probes.series(self, built, p))
         size = float(built.fem_elements + (built.lattice.n if built.lattice is not None else 0))
         sim.probes["model_size"] = lambda: size  # elements + particles

@@ -133,8 +133,8 @@ def beam_of(p: dict, mode: str) -> Built:
     if any(n % k for n in lam.plies):
         raise CaseError(f"zone.plies_per_particle = {k}: must divide every ply run of the laminate ({lam.plies})")
     t = k * lam.ply_thickness
-    if p["geometry.shape"] == "beam_3d":
-        return Built(p, mode, lam, 0.5 * p["geometry.span"], t, 4.0, dim=3)  # a quarter of the beam
+    if p["geometry.shape"] in ("beam_3d", "plate"):
+        return Built(p, mode, lam, 0.5 * p["geometry.span"], t, 4.0, dim=3)  # a quarter
     return Built(p, mode, lam, 0.5 * p["geometry.span"], t, 2 * p["geometry.width"] / t)  # whole width, both halves
 
 
@@ -167,7 +167,7 @@ def beam(study, p: dict, mode: str, dem: str):
     if mode == "coupled" and not 2 * t < w < 0.8 * L:
         raise CaseError(f"zone.half_width = {w:g}: allowed between two particle sizes ({2 * t:g} m) and 0.8 x "
                         "half the span")
-    clamp = _support_fix(study, p) == "xy"
+    clamp = _support(study, p) == "clamped"
     zone = _particle_block if dim == 3 else _particle_zone
     lat, scene, intra, inter = zone(built, w, tied=(mode == "coupled"), clamped=(mode == "dem" and clamp))
     built.lattice, built.intra, built.inter = lat, intra, inter
@@ -202,11 +202,12 @@ def beam(study, p: dict, mode: str, dem: str):
     return sim, built
 
 
-def _support_fix(study, p: dict) -> str:
+def _support(study, p: dict) -> str:
+    """The condition of the one [supports.NAME] table (clamped or simply_supported)."""
     names = list(study.layout.names["supports"])
     if len(names) != 1:
         raise CaseError(f"supports: a beam takes one [supports.NAME] table at its ends; given {len(names)}")
-    return p[f"supports.{names[0]}.fix"]
+    return p[f"supports.{names[0]}.condition"]
 
 
 def _fem_supports(study, p: dict, region, L: float, dim: int, symmetry_x: bool) -> list[PrescribedMotion]:
@@ -215,7 +216,7 @@ def _fem_supports(study, p: dict, region, L: float, dim: int, symmetry_x: bool) 
     it, x = 0."""
     X = region.X
     end = np.flatnonzero(np.abs(X[:, 0] - L) < 1e-9 * L)
-    if _support_fix(study, p) == "xy":
+    if _support(study, p) == "clamped":
         out = [PrescribedMotion(np.concatenate([dim * end + c for c in range(dim)]))]
     else:
         bottom = end[X[end, dim - 1] < 1e-9 * L]
@@ -355,3 +356,132 @@ def _particle_impactor(p: dict, name: str, built: Built) -> ParticleImpactor:
     imp = RigidImpactor("sphere", np.array([0.0, H - d / 2 + R + r + 1e-9, 0.0]), R + r, 0.5 * q["mass_per_width"] * d,
                         np.array([0.0, -q["velocity"], 0.0]), k_pen, friction=q["friction"])
     return ParticleImpactor(imp, top, fixed=(True, False, True))
+
+
+# -- a plate ------------------------------------------------------------------------------------
+def plate(study, p: dict, mode: str, dem: str):
+    """(Simulation, Built) of a quarter of a rectangular laminated plate (symmetry planes x = 0
+    and y = 0, the thickness along z) under impactors on its centre, supported at its edges;
+    the zone a square column |x|, |y| <= zone.half_width through the thickness."""
+    built = beam_of(p, mode)
+    d, t_end = built.t, study.t_end
+    a2, b2, w = 0.5 * p["geometry.span"], 0.5 * p["geometry.width"], p["zone.half_width"]
+    for key, length in (("geometry.span", 2 * a2), ("geometry.width", 2 * b2), ("zone.half_width", 2 * w)):
+        m = 0.5 * length / d
+        if abs(m - round(m)) > 1e-6:
+            raise CaseError(f"{key} = {p[key]:g}: its half must be a whole number of particle spacings ({d:g} m); "
+                            f"allowed e.g. {2 * max(1, round(m)) * d if key != 'zone.half_width' else max(1, round(m)) * d:g} m")
+    clamp = _support(study, p) == "clamped"
+    if mode == "fem":
+        region = _fem_plate(p, built, hole=False)
+        imps = {name: _fem_sphere(p, name, built, region) for name in study.layout.names["impactors"]}
+        dyn = ExplicitDynamics(region, supports=_plate_supports(region, built, clamp, symmetry=True),
+                               impactors=list(imps.values()))
+        built.dyn, built.impactors, built.fem_elements = dyn, imps, region.n_elements
+        return fem_only(dyn, p, t_end, {}), built
+    if mode == "coupled" and not 2 * d < w < 0.8 * min(a2, b2):
+        raise CaseError(f"zone.half_width = {w:g}: allowed between two particle sizes ({2 * d:g} m) and 0.8 x "
+                        "the plate's smaller half side")
+    tied = mode == "coupled"
+    lam = built.lam
+    nx, ny = (int(round(w / d)) + 1,) * 2 if tied else (int(round(a2 / d)) + 1, int(round(b2 / d)) + 1)
+    half = [(0, 0), (1, 0)] + ([(0, nx - 1), (1, ny - 1)] if tied else [])
+    block = ply_block.build((0.0, 0.0, 0.0), (nx, ny), [n // round(d / lam.ply_thickness) for n in lam.plies],
+                            lam.angles, d, lam.material(), half_planes=half)
+    i, j = block.index[:, 0], block.index[:, 1]
+    to_edge = np.minimum(nx - 1 - i, ny - 1 - j)  # columns to the zone's (or plate's) edge
+    edge = np.flatnonzero(to_edge == 0)
+    l = block.x[block.intra_pairs[:, 1]] - block.x[block.intra_pairs[:, 0]]
+    intra = LawBonds(block.intra_pairs, block.x, l, block.intra_area, block.intra_law, volume=block.volume,
+                     label="intralaminar")
+    itf = lam.interface
+    law = ply_block.interlaminar_law(block, itf["Z0"], itf["R0"], itf["GIc"], itf["GIIc"])
+    inter = LawBonds(block.inter_pairs, block.x, np.tile([0.0, 0.0, 1.0], (len(block.inter_pairs), 1)),
+                     block.inter_area, law, friction=itf["friction"], along=block.inter_along, label="interlaminar")
+    groups = {"interface": edge} if tied else {"fixed": edge} if clamp else {}
+    scene = ply_block.engine_scene(block, groups=groups)
+    built.lattice, built.intra, built.inter = block, intra, inter
+    built.column = to_edge.max() - to_edge  # the largest on the edge, as a beam's last column
+    built.end_held = tied or clamp
+    built.impactors = {name: _particle_sphere(p, name, built) for name in study.layout.names["impactors"]}
+    models = (intra, inter, *built.impactors.values())
+    if mode == "dem":
+        sim, backend, _ = dem_only(p, scene, dem, t_end, models=models)
+        if not clamp:  # simply supported: the bottom particles of the edges, vertically
+            bottom = edge[block.index[edge, 2] == 0]
+            backend.prescribe(bottom, "z")
+            backend.set_velocities(bottom, np.zeros((len(bottom), 3)))
+    else:
+        def make(extra_mass):
+            region = _fem_plate(p, built, hole=True)
+            return ExplicitDynamics(region, supports=_plate_supports(region, built, clamp, symmetry=True),
+                                    extra_mass=extra_mass)
+        sim, clock = coupled_simulation(p, make, scene, dem, t_end, models=models)
+        backend, built.dyn, built.fem_elements = clock.dem, clock.fem, clock.fem.region.n_elements
+    built.backend = backend
+    held = np.concatenate([scene.groups.get("interface", []), scene.groups.get("fixed", [])]).astype(int)
+    hold_symmetry_planes(backend, i, j, held)
+    sim.counts.update({"law_bonds": len(intra.pairs) + len(inter.pairs)})
+    return sim, built
+
+
+def _plate_axis(w: float, half: float, n_zone: int, n: int, ratio: float) -> np.ndarray:
+    """Node coordinates on [0, half]: n_zone equal elements over the zone's [0, w], then n graded
+    from w (smallest there) to the edge."""
+    return np.concatenate([np.linspace(0.0, w, n_zone + 1)[:-1], mesh.graded(w, half, n, ratio, w)])
+
+
+def _fem_plate(p: dict, built: Built, hole: bool):
+    """Hex8 laminate on the quarter plate, one element layer per particle row; with ``hole``
+    the zone's square column left out (the FEM around the particles)."""
+    lam, k, w = built.lam, p["zone.plies_per_particle"], p["zone.half_width"]
+    n, nz = p["mesh.elements_along"], p["mesh.elements_width"]
+    ratio = p["mesh.element_ratio"] ** (1.0 / max(n - 1, 1))
+    m = mesh.box(_plate_axis(w, 0.5 * p["geometry.span"], nz, n, ratio),
+                 _plate_axis(w, 0.5 * p["geometry.width"], nz, n, ratio),
+                 np.linspace(0.0, lam.thickness, sum(lam.plies) // k + 1), "hex8")
+    centre = m.p[:, m.t].mean(axis=1)
+    if hole:
+        m = m.remove_elements(np.flatnonzero((centre[0] < w) & (centre[1] < w)))
+        centre = m.p[:, m.t].mean(axis=1)
+    run = np.searchsorted(np.cumsum(lam.plies) * lam.ply_thickness, centre[2])
+    return make_region(m, p, np.array([lam.C(lam.angles[b]) for b in run]), lam.ply["rho"], 1.0)
+
+
+def _plate_supports(region, built: Built, clamp: bool, symmetry: bool) -> list[PrescribedMotion]:
+    """Clamped edges (every DOF at x = span / 2 and y = width / 2) or simply supported ones
+    (their bottom edges, vertically); the symmetry planes x = 0 and y = 0."""
+    X, p = region.X, built.p
+    a2, b2 = 0.5 * p["geometry.span"], 0.5 * p["geometry.width"]
+    tol = 1e-9 * max(a2, b2)
+    edge = np.flatnonzero((np.abs(X[:, 0] - a2) < tol) | (np.abs(X[:, 1] - b2) < tol))
+    if clamp:
+        out = [PrescribedMotion(np.concatenate([3 * edge + c for c in range(3)]))]
+    else:
+        out = [PrescribedMotion(3 * edge[X[edge, 2] < tol] + 2)]
+    if symmetry:
+        out += [PrescribedMotion(3 * np.flatnonzero(np.abs(X[:, 0]) < tol)),
+                PrescribedMotion(3 * np.flatnonzero(np.abs(X[:, 1]) < tol) + 1)]
+    return out
+
+
+def _particle_sphere(p: dict, name: str, built: Built) -> ParticleImpactor:
+    """A quarter of the sphere (two symmetry planes cut it) on the top rows, moving only along z."""
+    q, block, d = section(p, f"impactors.{name}"), built.lattice, built.t
+    H, R, r = built.lam.thickness, q["radius"], block.radius
+    top = np.flatnonzero(block.index[:, 2] >= block.index[:, 2].max() - 1)
+    ball = RigidImpactor("sphere", np.array([0.0, 0.0, H - d / 2 + R + r + 1e-9]), R + r, 0.25 * q["mass"],
+                         np.array([0.0, 0.0, -q["velocity"]]), q["penalty"] or built.lam.ply["E22"] * d,
+                         friction=q["friction"])
+    return ParticleImpactor(ball, top, fixed=(True, True, False))
+
+
+def _fem_sphere(p: dict, name: str, built: Built, region) -> RigidImpactor:
+    """A quarter of the sphere on the FEM's top nodes; the particles' penalty times a node's
+    share of the surface in particles."""
+    q, d, H, X = section(p, f"impactors.{name}"), built.t, built.lam.thickness, region.X
+    top = X[:, 2] > H - 1e-9 * H
+    share = max(1.0, np.diff(np.unique(X[top, 0])).min() / d) * max(1.0, np.diff(np.unique(X[top, 1])).min() / d)
+    return RigidImpactor("sphere", np.array([0.0, 0.0, H + q["radius"] + 1e-9]), q["radius"], 0.25 * q["mass"],
+                         np.array([0.0, 0.0, -q["velocity"]]), (q["penalty"] or built.lam.ply["E22"] * d) * share,
+                         friction=q["friction"])

@@ -54,8 +54,8 @@ def damage(h: dict, plots_dir) -> None:
         if f"{name}.width_index" in h:
             j = np.asarray(h[f"{name}.width_index"]).astype(int)
             y_edge = x[j == j.max(), 1].max()
-            sections = [(j == 0, [0, 2], "mid-width (symmetry plane)", 0.0),
-                        (j == j.max(), [0, 2], "free edge", y_edge)]
+            sections = [(j == 0, [0, 2], "y = 0 (symmetry plane)", 0.0),
+                        (j == j.max(), [0, 2], f"y = {y_edge:.3g} mm (the zone's edge or the free edge)", y_edge)]
         else:
             sections = [(np.ones(len(x), bool), [0, 1], "", None)]
         wide = 12 if fem is None else 16

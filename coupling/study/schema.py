@@ -11,15 +11,18 @@ Sections (one concept, one key):
 - interfaces.*: kind "hashin" (interlaminar law: Z0, R0, GIc, GIIc, friction)
 - laminates.*:  layup, ply_thickness, material, interface
 - geometry:     shape "beam" (a plane-strain slice of a laminated beam along x, y through the
-                thickness, centred on x = 0) or "beam_3d" (a quarter of it, the thickness along
-                z), its laminate, span, width, symmetry
+                thickness, centred on x = 0), "beam_3d" (a quarter of it, the thickness along
+                z) or "plate" (a quarter of a rectangular plate), its laminate, span, width,
+                symmetry
 - mesh:         FEM elements and their sizing, graded towards the zone
 - fem:          the FEM's integration and formulation
 - zone:         the DEM damage zone: shape "box" (|x| <= half_width, the whole thickness),
                 plies_per_particle (the particle size in plies)
-- supports.*:   at "ends" (x = +-span / 2), fix "xy" (clamped) or "y" (simply supported)
-- impactors.*:  shape "cylinder" on the top face at x = 0: radius, mass_per_width, velocity,
-                penalty, friction
+- supports.*:   at "ends" (a beam's, x = +-span / 2) or "edges" (a plate's), condition clamped
+                or simply_supported
+- impactors.*:  shape "cylinder" (a beam's, along its width, on the top face at x = 0: radius,
+                mass_per_width, velocity, penalty, friction) or "sphere" (a plate's, on its centre:
+                radius, mass, velocity, penalty, friction)
 - probes.*:     kind from the registry (study/probes.py), with what the run reports of them
 - checks.*:     a qoi against a closed form registered in code (study/closed_forms.py), tol
 - coupling:     the FEM-DEM tie
@@ -80,6 +83,14 @@ KINDS: dict[str, dict[str, dict[str, Param]]] = {
         },
     },
     "impactors": {
+        "sphere": {  # on a plate's centre
+            "radius": positive(REQUIRED, "sphere radius", "m"),
+            "mass": positive(REQUIRED, "mass", "kg"),
+            "velocity": positive(REQUIRED, "impact speed (downwards, on the top face at the centre)", "m/s"),
+            "penalty": Param(0.0, "contact penalty per particle / node; 0 = E22 times the particle size",
+                             unit="N/m", low=0.0),
+            "friction": Param(0.2, "impactor friction", low=0.0, high=2.0),
+        },
         "cylinder": {
             "radius": positive(REQUIRED, "cylinder radius", "m"),
             "mass_per_width": positive(REQUIRED, "mass per metre of width", "kg/m"),
@@ -90,9 +101,13 @@ KINDS: dict[str, dict[str, dict[str, Param]]] = {
         },
     },
     "supports": {
-        "ends": {
-            "fix": Param("xy", "what the supports hold at x = +-span / 2: xy (clamped) or y (simply supported, "
-                         "on the bottom corner)", kind="str", choices=("xy", "y")),
+        "ends": {  # a beam's, at x = +-span / 2
+            "condition": Param("clamped", "clamped (the end face held) or simply_supported (its bottom edge held "
+                               "vertically)", kind="str", choices=("clamped", "simply_supported")),
+        },
+        "edges": {  # a plate's, at x = +-span / 2 and y = +-width / 2
+            "condition": Param("clamped", "clamped (the edge faces held) or simply_supported (their bottom edges "
+                               "held vertically)", kind="str", choices=("clamped", "simply_supported")),
         },
     },
 }
@@ -111,20 +126,22 @@ LAMINATE = {
 SECTIONS: dict[str, dict[str, Param]] = {
     "geometry": {
         "shape": Param("beam", "beam: a plane-strain slice of a laminated beam along x, centred on x = 0; "
-                       "beam_3d: a quarter of it (x = 0 and mid-width y = 0 symmetry planes), thickness along z",
-                       kind="str", choices=("beam", "beam_3d")),
+                       "beam_3d: a quarter of it (x = 0 and mid-width y = 0 symmetry planes), thickness along z; "
+                       "plate: a quarter of a rectangular plate, span along x and width along y, centred on x = y = 0",
+                       kind="str", choices=("beam", "beam_3d", "plate")),
         "laminate": Param(REQUIRED, "the beam's laminate (a [laminates.*] name)", kind="str"),
         "span": positive(REQUIRED, "distance between the supports", "m"),
         "width": positive(REQUIRED, "width out of the slice's plane (forces are reported for the whole width)", "m"),
         "symmetry": Param("x", "the symmetry planes: x (beam: half model about x = 0) or xy (beam_3d: also "
-                          "mid-width y = 0)", kind="str", choices=("x", "xy")),
+                          "mid-width y = 0; plate)", kind="str", choices=("x", "xy")),
     },
     "mesh": {
-        "element": Param("quad4", "element: quad4 (beam) or hex8 (beam_3d)", kind="str", choices=("quad4", "hex8")),
+        "element": Param("quad4", "element: quad4 (beam) or hex8 (beam_3d, plate)", kind="str",
+                         choices=("quad4", "hex8")),
         "elements_along": Param(30, "FEM elements between the zone and a support", kind="int", low=2),
         "element_ratio": Param(6.0, "largest / smallest element length, graded from the zone", low=1.0, high=100.0),
-        "elements_width": Param(4, "Hex8 elements across the modelled half width (beam_3d)", kind="int", low=1,
-                                high=200),
+        "elements_width": Param(4, "Hex8 elements across the modelled half width (beam_3d), or across the "
+                                "zone's half width (plate)", kind="int", low=1, high=200),
     },
     "fem": {
         "integration": Param("selective", "full, or selective (shear at the centroid: no shear locking)",
@@ -132,7 +149,8 @@ SECTIONS: dict[str, dict[str, Param]] = {
         "formulation": Param("linear", "small-strain linear or Total Lagrangian", kind="str", choices=FORMULATIONS),
     },
     "zone": {
-        "shape": Param("box", "box: |x| <= half_width through the whole thickness", kind="str", choices=("box",)),
+        "shape": Param("box", "box: |x| <= half_width (a plate: and |y| <= half_width) through the whole "
+                       "thickness", kind="str", choices=("box",)),
         "half_width": positive(REQUIRED, "half width of the DEM zone about x = 0 (coupled mode)", "m"),
         "plies_per_particle": Param(1, "plies per particle row (the particle size is this x ply thickness)",
                                     kind="int", low=1, high=8),
