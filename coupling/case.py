@@ -137,8 +137,9 @@ def refuse_ineffective(case: Case, mode: str, dem: str | None) -> None:
     p = case.parameters
     if mode == "fem" and dem is not None:
         raise CaseError(f"--dem {dem}: --mode fem runs no DEM engine; allowed: leave --dem out")
-    no_dem = ("dem.", "particle.", "coupling.tie", "clock.substeps", "zone.half_width", "zone.shape")
-    no_tie = ("coupling.tie", "clock.substeps", "dem.half_width", "zone.half_width")  # all-DEM: the zone is the whole body
+    no_dem = ("dem.", "coupling.tie", "clock.substeps", "zone.half_width", "zone.shape", "zone.particle_size",
+              "zone.window_", "zone.ply_failure")
+    no_tie = ("coupling.tie", "clock.substeps", "zone.half_width")  # all-DEM: the zone is the whole body
     schema = {**COMMON, **case.scene.PARAMETERS}
     for key in sorted(k for k in case.given if p[k] != schema[k].default):  # the default changes nothing
         if mode == "fem" and key.startswith(no_dem) or mode == "dem" and key.startswith(no_tie):

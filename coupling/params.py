@@ -128,6 +128,11 @@ def particle_radius(default: float, doc: str) -> Param:
     return Param(default, doc, "float", "m", low=0.0, open_low=True, plausible=PARTICLE_SI)
 
 
+def particle_size(default: float, doc: str) -> Param:
+    """A DEM particle size d (m): a diameter, the spacing of a lattice."""
+    return Param(default, doc, "float", "m", low=0.0, open_low=True, plausible=PARTICLE_SI)
+
+
 def isotropic_material(E: float, rho: float, poisson: float | None = None) -> dict[str, Param]:
     """material.E, material.rho (and material.poisson) with the given defaults."""
     out = {"material.E": modulus(E, "Young's modulus"), "material.rho": density(rho)}
@@ -148,8 +153,15 @@ def flatten(table: dict, prefix: str = "") -> dict[str, Any]:
     return flat
 
 
-# keys that were renamed (one concept, one key): the old key is refused with the new name
-RENAMED = {"interface.tie": "coupling.tie", "interface.tie_penalty": "coupling.tie_penalty"}
+# keys that were renamed (one concept, one key): the old key is refused with its new name, the
+# first of these the case has (with what changed, if more than the name)
+RENAMED: dict[str, tuple[tuple[str, str], ...]] = {
+    "interface.tie": (("coupling.tie", ""),), "interface.tie_penalty": (("coupling.tie_penalty", ""),),
+    "particle.radius": (("zone.particle_size", " = twice the old radius"), ("sphere.radius", "")),
+    "dem.particle_size": (("zone.particle_size", ""),), "dem.half_width": (("zone.half_width", ""),),
+    "dem.window_ahead": (("zone.window_ahead", ""),), "dem.window_behind": (("zone.window_behind", ""),),
+    "dem.ply_failure": (("zone.ply_failure", ""),),
+}
 
 
 def resolve(schema: dict[str, Param], given: dict[str, Any], where: str,
@@ -162,7 +174,8 @@ def resolve(schema: dict[str, Param], given: dict[str, Any], where: str,
     unknown = sorted(set(given) - set(schema))
     if unknown:
         key = unknown[0]
-        new = RENAMED.get(key) or (renamed(key) if renamed else None)
+        new = next((k + note for k, note in RENAMED.get(key, ()) if k in schema), None)
+        new = new or (renamed(key) if renamed else None)
         if new:
             raise CaseError(f"{key}: renamed, now {new} (in {where})")
         near = [k for k in schema if k.split(".")[-1] == key.split(".")[-1] or k.startswith(key.split(".")[0] + ".")]

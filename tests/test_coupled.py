@@ -12,7 +12,7 @@ from interfaces.transition import InterfaceError, TransitionInterface
 
 
 @pytest.mark.parametrize("sets", [[], ["chain.fem_elements=7", "chain.particles=13", "material.E=2e9",
-                                       "particle.radius=0.002"]])
+                                       "zone.particle_size=0.004"]])
 def test_chain_consistency_matches_monolithic(femdem, sets):
     code, s, _ = femdem("run", "chain_consistency", *sum((["--set", x] for x in sets), []))
     assert code == 0

@@ -34,7 +34,7 @@ def test_dcb_dissipation_is_in_the_ledger(femdem):
 def test_ply_fracture_strength_and_energy(femdem, angle, radius):
     """Hoffman initiation at the uniaxial strength, dissipation = Gf x area (5 %)."""
     code, s, err = femdem("run", "ply_fracture", "--mode", "dem", "--set", f"ply.angle={angle}",
-                          "--set", f"particle.radius={radius}")
+                          "--set", f"zone.particle_size={2 * radius}")
     assert code == 0, err
     assert_checks(s)
 
@@ -70,7 +70,7 @@ def test_dcb_particle_size_study(femdem):
     crack area by less than 5 % (issue 6)."""
     out = {}
     for r in (0.25e-3, 0.125e-3):
-        code, s, err = femdem("run", "dcb_coarse", "--set", f"particle.radius={r}")
+        code, s, err = femdem("run", "dcb_coarse", "--set", f"zone.particle_size={2 * r}")
         assert code == 0, err
         out[r] = s["qoi"]
     a, b = out[0.25e-3], out[0.125e-3]
@@ -80,6 +80,6 @@ def test_dcb_particle_size_study(femdem):
 
 @pytest.mark.slow
 def test_ply_fracture_energy_at_a_finer_lattice(femdem):
-    code, s, err = femdem("run", "ply_fracture", "--mode", "dem", "--set", "particle.radius=0.03125e-3")
+    code, s, err = femdem("run", "ply_fracture", "--mode", "dem", "--set", "zone.particle_size=0.0625e-3")
     assert code == 0, err
     assert_checks(s)

@@ -58,13 +58,13 @@ RADIUS = st.floats(0.18e-3, 0.32e-3)  # particle radius; above h / 12 it is refu
 
 
 def dcb_sets(m, h, a_rel, substeps, r=0.25e-3):
-    return [*material_sets(m), f"--set=particle.radius={r}", f"--set=geometry.arm_thickness={h}", f"--set=geometry.crack_length={a_rel * 8 * h}",
+    return [*material_sets(m), f"--set=zone.particle_size={2 * r}", f"--set=geometry.arm_thickness={h}", f"--set=geometry.crack_length={a_rel * 8 * h}",
             "--set=geometry.length=0.1", f"--set=clock.substeps={substeps}"]
 
 
 def bending_sets(m, h, L_rel, a_rel, substeps, r=0.25e-3):
     L = L_rel * 8 * h
-    return [*material_sets(m), f"--set=particle.radius={r}", f"--set=geometry.arm_thickness={h}", f"--set=geometry.half_span={L}",
+    return [*material_sets(m), f"--set=zone.particle_size={2 * r}", f"--set=geometry.arm_thickness={h}", f"--set=geometry.half_span={L}",
             f"--set=geometry.length={2 * L}", f"--set=geometry.crack_length={a_rel * L}",
             f"--set=clock.substeps={substeps}"]
 
@@ -125,7 +125,7 @@ def test_delamination_specimens_hold_on_every_engine(femdem, case, engine, m, h,
     (["--set=interface.GIc=150", "--set=interface.cohesive_zone_bonds=0", "--set=interface.Z0=1.5e8"],
      "interface.GIc"),  # below Z0^2 / (2 K): linear softening cannot start
     (["--set=material.E11=30e9"], "material.E11"),  # outside the verified range
-    (["--set=particle.radius=0.3e-3"], "particle.radius"),  # coarser than h / 12 (h = 3 mm)
+    (["--set=zone.particle_size=0.6e-3"], "zone.particle_size"),  # coarser than h / 6 (h = 3 mm)
 ])
 def test_dcb_refuses_what_it_cannot_model(femdem, sets, key):
     code, s, err = femdem("run", "dcb_coarse", *sets)

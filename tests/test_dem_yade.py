@@ -32,7 +32,7 @@ def test_chung_ooi_2_sphere_on_plane(femdem, material):
     # the check's reference uses the stand-in sphere; the ideal plane (R* = R, E* = E/(1-nu^2))
     # must agree within about 1 / radius_ratio
     p = s["parameters"]
-    E, nu, rho, R, v = (p[k] for k in ("material.E", "material.poisson", "material.rho", "particle.radius",
+    E, nu, rho, R, v = (p[k] for k in ("material.E", "material.poisson", "material.rho", "sphere.radius",
                                        "impact.velocity"))
     Es, m = E / (1 - nu**2), rho * 4 / 3 * np.pi * R**3
     d = (15 * m * v**2 / (16 * Es * np.sqrt(R))) ** 0.4
@@ -187,7 +187,7 @@ def test_sphere_on_a_wall(femdem):
     E, nu, rho, R, v = 70e9, 0.3, 2699.0, 0.1, 0.2
     scene = DemScene(np.array([[0, 0, R * (1 + 1e-6)]]), R, rho, np.zeros((0, 2)), 0.0, 0.0, young=E, poisson=nu,
                      contact="hertz_mindlin", velocity=[[0, 0, -v]], walls=[Wall(2, 0.0, 1)])
-    ref = hertz({"material.E": E, "material.poisson": nu, "material.rho": rho, "particle.radius": R,
+    ref = hertz({"material.E": E, "material.poisson": nu, "material.rho": rho, "sphere.radius": R,
                  "impact.velocity": v, "plane.radius_ratio": 1.0, "plane.stiffness_ratio": 1e6}, 2)
     eng = make_backend("yade")
     try:

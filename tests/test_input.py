@@ -94,15 +94,18 @@ def test_unit_slips_are_caught(femdem, setting, words):
 
 @pytest.mark.parametrize("case, args, words", [
     ("cfrp_beam_impact_coarse", ["--set=load.file=/nonexistent/drop.csv"], ["load.file", "/nonexistent/drop.csv"]),
-    ("cfrp_beam_impact_coarse", ["--set=dem.particle_size=5e-3"], ["dem.particle_size", "whole number"]),
+    ("cfrp_beam_impact_coarse", ["--set=zone.particle_size=5e-3"], ["zone.particle_size", "whole number"]),
+    ("dcb_coarse", ["--set=particle.radius=2e-4"], ["particle.radius", "renamed", "zone.particle_size", "twice"]),
+    ("chung_ooi_1", ["--set=particle.radius=0.02"], ["particle.radius", "renamed", "sphere.radius"]),
+    ("rod_impact_coarse", ["--set=dem.half_width=0.02"], ["dem.half_width", "renamed", "zone.half_width"]),
     ("cfrp_beam_impact_coarse", ["--set=geometry.span=0.9"], ["geometry.span", "0.9", "allowed"]),
-    ("cfrp_beam_impact_coarse", ["--set=dem.half_width=0.5"], ["dem.half_width", "allowed"]),
+    ("cfrp_beam_impact_coarse", ["--set=zone.half_width=0.5"], ["zone.half_width", "allowed"]),
     ("rod_impact_coarse", ["--set=interface.penalty=2e10"], ["interface.penalty", "toughness"]),
     ("rod_impact_coarse", ["--set=fem.integration=selective"], ["fem.integration", "allowed"]),
     ("rod_impact_coarse", ["--mode", "dem"], ["--mode dem", "fem, coupled"]),
-    ("rod_impact_coarse", ["--mode", "coupled", "--set=dem.particle_size=0.005"], ["dem.particle_size", "divide"]),
-    ("panel_buckling_coarse", ["--mode", "coupled", "--set=dem.window_ahead=0.03"], ["dem.window_ahead", "allowed"]),
-    ("panel_buckling_coarse", ["--mode", "coupled", "--set=particle.radius=2e-4"], ["particle.radius", "allowed"]),
+    ("rod_impact_coarse", ["--mode", "coupled", "--set=zone.particle_size=0.005"], ["zone.particle_size", "divide"]),
+    ("panel_buckling_coarse", ["--mode", "coupled", "--set=zone.window_ahead=0.03"], ["zone.window_ahead", "allowed"]),
+    ("panel_buckling_coarse", ["--mode", "coupled", "--set=zone.particle_size=4e-4"], ["zone.particle_size", "allowed"]),
 ])
 def test_bad_input_of_the_seed_scenes(femdem, case, args, words):
     code, summary, err = femdem("run", case, *args)
@@ -194,7 +197,7 @@ def test_case_files_with_a_byte_order_mark_are_read(femdem, tmp_path, encoding):
     (["run", "chain_consistency", "--mode", "fem", "--set", "dem.process=worker"], ["dem.process", "no effect"]),
     (["run", "beam_impact_coarse", "--mode", "dem", "--set", "zone.half_width=6e-3"], ["zone.half_width", "no effect"]),
     (["run", "chain_consistency", "--set", "dem.ranks=2", "--dem", "yade"], ["dem.ranks = 2", "lammps"]),
-    (["run", "chain_consistency", "--set", "particle.radius=1e-12"], ["particle.radius", "implausible"]),
+    (["run", "chain_consistency", "--set", "zone.particle_size=1e-12"], ["zone.particle_size", "implausible"]),
     (["run", "chain_consistency", "--set", "chain.particles=1000000000"], ["chain.particles", "<= 100000"]),
     (["run", "beam_impact_coarse", "--set", "laminates.beam.layup=[0/90]0s"], ["laminates.beam.layup", "repeat 0"]),
     (["run", "beam_impact_coarse", "--set", "laminates.beam.layup=[0_0/90]"], ["laminates.beam.layup", "count >= 1"]),

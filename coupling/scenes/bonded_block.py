@@ -24,12 +24,12 @@ from dem_region.backends import check_available, make_backend
 from dem_region.scene import DemScene
 
 from ..checks import check
-from ..params import isotropic_material, Param, particle_radius, positive
+from ..params import isotropic_material, Param, particle_size, positive
 from ..simulation import Simulation, Stage
 
 COMMON = {
     **isotropic_material(10e9, 2000.0),
-    "particle.radius": particle_radius(0.0005, "sphere radius"),
+    "zone.particle_size": particle_size(0.001, "particle size d (diameter; the lattice spacing)"),
     "packing.kind": Param("square", "regular layer", kind="str", choices=("square", "hexagonal")),
     "geometry.columns": Param(40, "particles along the block", kind="int", low=4),
     "geometry.rows": Param(10, "particles across the block", kind="int", low=3),
@@ -39,7 +39,7 @@ COMMON = {
 
 def layer(p: dict) -> DemScene:
     """The uncalibrated layer (bond stiffness from the closed form of its lattice)."""
-    r, E = p["particle.radius"], p["material.E"]
+    r, E = 0.5 * p["zone.particle_size"], p["material.E"]
     d = 2 * r
     if p["packing.kind"] == "square":
         x = packing.square_2d((0, 0), ((p["geometry.columns"] - 1) * d, (p["geometry.rows"] - 1) * d), r)

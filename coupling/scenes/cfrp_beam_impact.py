@@ -16,7 +16,7 @@ nu12 = 0.3: typical carbon/epoxy; they only enter the FEM row that carries the s
 sheet's fibre fracture energy (40 kJ/m^2, the ply value of the other cases).
 
 Modes (the same beam, supports and load):
-- coupled: DEM zone |x| < dem.half_width over the whole depth (isotropic concrete lattice with
+- coupled: DEM zone |x| < zone.half_width over the whole depth (isotropic concrete lattice with
   PlyBondLaw: Hoffman with ft, fc and the isotropic Hoffman shear strength sqrt(ft fc / 3),
   Gf-regularised softening; a row of sheet particles below it with axial bonds (T0); Hashin
   bonds between them with the interface's strengths and toughness, friction after debonding);
@@ -112,9 +112,9 @@ PARAMETERS = {
     "load.patch_width": positive(1 * INCH, "width of the loaded patch on the top face (whole, both halves)", "m"),
     "load.file": Param("", "CSV time_ms,load_kN of the drop load; empty = the seed's Table 4", kind="str"),
     "load.scale": positive(1.0, "factor on the drop load", ""),
-    "dem.half_width": positive(4 * INCH, "half width of the DEM zone around mid-span (debonding reaches ~1/10 of "
+    "zone.half_width": positive(4 * INCH, "half width of the DEM zone around mid-span (debonding reaches ~1/10 of "
                                "the sheet either side by 750 us in the test)", "m"),
-    "dem.particle_size": positive(2.54e-3, "lattice spacing d (the depth must hold a whole number of rows)", "m"),
+    "zone.particle_size": positive(2.54e-3, "lattice spacing d (the depth must hold a whole number of rows)", "m"),
     "mesh.growth": Param(1.2, "FEM element size ratio between neighbours away from the zone", low=1.0, high=2.0),
     "mesh.max_size": positive(25e-3, "largest FEM element length along the beam", "m"),
     **{k: v for k, v in FEM_OPTIONS.items() if k not in ("mesh.element", "fem.hypothesis")},
@@ -140,10 +140,10 @@ def drop_load(p: dict):
 
 def rows(p: dict) -> tuple[int, float]:
     """(concrete particle rows, d)."""
-    d, H = p["dem.particle_size"], p["geometry.depth"]
+    d, H = p["zone.particle_size"], p["geometry.depth"]
     n = int(round(H / d))
     if n < 4 or abs(n * d - H) > 1e-6 * H:
-        raise CaseError(f"dem.particle_size = {d:g}: the depth {H:g} m must hold a whole number (>= 4) of rows")
+        raise CaseError(f"zone.particle_size = {d:g}: the depth {H:g} m must hold a whole number (>= 4) of rows")
     return n, d
 
 
@@ -157,7 +157,7 @@ def sheet_D(p: dict) -> np.ndarray:
 
 
 def geometry_check(p: dict) -> None:
-    L, s, w = p["geometry.length"], p["geometry.span"], p["dem.half_width"]
+    L, s, w = p["geometry.length"], p["geometry.span"], p["zone.half_width"]
     if not 2 * p["geometry.depth"] < s < L:
         raise CaseError(f"geometry.span = {s:g}: allowed between two depths and the length {L:g} m")
     if p["load.patch_width"] / 2 >= s / 2:
@@ -299,9 +299,9 @@ def build(p: dict, mode: str, dem: str):
     if mode == "fem":
         return _build_fem(p, t, width_share)
     L, s = p["geometry.length"] / 2, p["geometry.span"] / 2
-    w = L if mode == "dem" else p["dem.half_width"]
+    w = L if mode == "dem" else p["zone.half_width"]
     if mode == "coupled" and not 4 * d <= w <= s - 4 * d:
-        raise CaseError(f"dem.half_width = {w:g}: allowed from four particle sizes ({4 * d:g} m) to four short of "
+        raise CaseError(f"zone.half_width = {w:g}: allowed from four particle sizes ({4 * d:g} m) to four short of "
                         f"the support ({s - 4 * d:g} m)")
     w = d * round(w / d)
     zone = Zone(p, w, tied=(mode == "coupled"))

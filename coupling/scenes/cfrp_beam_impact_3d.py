@@ -6,14 +6,14 @@ quarter of the beam (symmetry planes at mid-span x = 0 and at mid-width y = 0), 
 faces at y = W / 2, the depth along z, the sheet under z = 0.
 
 Modes (the same beam, supports and load):
-- coupled: DEM zone |x| < dem.half_width over the whole depth and width: the concrete as a
+- coupled: DEM zone |x| < zone.half_width over the whole depth and width: the concrete as a
   3D lattice (dem_region/ply_block.py, isotropic: E and G = E / (2 (1 + nu)) exact, the
   lattice's Poisson ratio its Cauchy value) with PlyBondLaw (Hoffman with ft, fc and
   sqrt(ft fc / 3), Gf-regularised, 1 +- scatter on the strengths); the sheet as a layer of
   particles under the bottom row, a membrane lattice (axial bonds along the fibres and across,
   diagonals for G12); Hashin adhesive bonds between them with rotation-free slip along x
   and y; the drop load on the top particles under the patch; Hex8 elsewhere with the sheet
-  smeared into the bottom element layer; kinematic tie at x = dem.half_width;
+  smeared into the bottom element layer; kinematic tie at x = zone.half_width;
 - fem: all Hex8, no fracture (the no-fracture curve of the checks);
 - dem: all particles.
 
@@ -66,7 +66,7 @@ def columns(p: dict) -> int:
     _, d = rows(p)
     m = 0.5 * p["geometry.width"] / d
     if abs(m - round(m)) > 1e-6 or round(m) < 1:
-        raise CaseError(f"dem.particle_size = {d:g}: half the width {p['geometry.width']:g} m must hold a whole "
+        raise CaseError(f"zone.particle_size = {d:g}: half the width {p['geometry.width']:g} m must hold a whole "
                         "number of particle spacings")
     return int(round(m)) + 1
 
@@ -215,9 +215,9 @@ def build(p: dict, mode: str, dem: str):
         return _build_fem(p)
     n_rows, d = rows(p)
     L, s = p["geometry.length"] / 2, p["geometry.span"] / 2
-    w = L if mode == "dem" else p["dem.half_width"]
+    w = L if mode == "dem" else p["zone.half_width"]
     if mode == "coupled" and not 4 * d <= w <= s - 4 * d:
-        raise CaseError(f"dem.half_width = {w:g}: allowed from four particle sizes ({4 * d:g} m) to four short of "
+        raise CaseError(f"zone.half_width = {w:g}: allowed from four particle sizes ({4 * d:g} m) to four short of "
                         f"the support ({s - 4 * d:g} m)")
     w = d * round(w / d)
     zone = Zone(p, w, tied=(mode == "coupled"))

@@ -17,7 +17,7 @@ from fem_region import mesh
 from fem_region.explicit import ExplicitDynamics, PrescribedMotion
 
 from ..checks import bound
-from ..params import isotropic_material, Param, particle_radius, positive
+from ..params import isotropic_material, Param, particle_size, positive
 from ..participants.fem import fem_only, make_region
 from ..participants.coupled import COUPLING, coupled_simulation
 from ..participants.dem import dem_only
@@ -27,7 +27,7 @@ DESCRIPTION = "coupled: FEM bar + DEM chain vs the monolithic chain, to round-of
 MODES = ("coupled", "fem", "dem")
 PARAMETERS = {
     **isotropic_material(1e9, 1000.0),
-    "particle.radius": particle_radius(0.005, "sphere radius = half the FEM element length"),
+    "zone.particle_size": particle_size(0.01, "particle size d (diameter) = the FEM element length"),
     "chain.fem_elements": Param(20, "FEM elements along the left part", kind="int", low=1, high=100_000),
     "chain.particles": Param(20, "free DEM particles in the right part", kind="int", low=1, high=100_000),
     "chain.stiffness_ratio": Param(1.0, "DEM bond stiffness / FEM element stiffness (a hard case at 1000)",
@@ -43,7 +43,7 @@ PARAMETERS = {
 
 def _chain(p: dict):
     """Geometry shared by the coupled model and its monolithic reference."""
-    r, E, rho = p["particle.radius"], p["material.E"], p["material.rho"]
+    r, E, rho = 0.5 * p["zone.particle_size"], p["material.E"], p["material.rho"]
     le, A = 2 * r, (2 * r) ** 2  # element length; cross-section (height x width)
     k = E * A / le
     m_node = rho * A * le  # bar mass of one element length = one particle's mass

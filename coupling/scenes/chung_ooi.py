@@ -29,7 +29,7 @@ COMMON = {
     "material.E": modulus(48e9, "Young's modulus"),
     "material.poisson": Param(0.20, "Poisson ratio", low=0.0, high=0.49),
     "material.rho": density(2800.0),
-    "particle.radius": particle_radius(0.01, "sphere radius"),
+    "sphere.radius": particle_radius(0.01, "sphere radius"),
     "impact.velocity": positive(10.0, "impact speed (each sphere in test 1)", "m/s"),
     "clock.steps_per_contact": Param(400, "time steps per Hertz contact duration", kind="int", low=20),
 }
@@ -41,7 +41,7 @@ PLANE = {
 
 def hertz(p: dict, test: int) -> dict:
     """Closed-form Hertz impact from the run's parameters."""
-    E, nu, rho, R, v = (p["material.E"], p["material.poisson"], p["material.rho"], p["particle.radius"],
+    E, nu, rho, R, v = (p["material.E"], p["material.poisson"], p["material.rho"], p["sphere.radius"],
                         p["impact.velocity"])
     m = rho * 4.0 / 3.0 * np.pi * R**3
     if test == 1:
@@ -54,7 +54,7 @@ def hertz(p: dict, test: int) -> dict:
 
 
 def _scene(p: dict, test: int) -> DemScene:
-    E, nu, rho, R, v = (p["material.E"], p["material.poisson"], p["material.rho"], p["particle.radius"],
+    E, nu, rho, R, v = (p["material.E"], p["material.poisson"], p["material.rho"], p["sphere.radius"],
                         p["impact.velocity"])
     gap = 1e-6 * R
     if test == 1:
@@ -74,7 +74,7 @@ def _build(test: int):
         ref = hertz(p, test)
         scene = _scene(p, test)
         v = p["impact.velocity"] * (2 if test == 1 else 1)
-        t_end = 1.3 * ref["contact_duration"] + 1e-6 * p["particle.radius"] / v
+        t_end = 1.3 * ref["contact_duration"] + 1e-6 * p["sphere.radius"] / v
         sim, backend, _ = dem_only(p, scene, dem, t_end, history_every=1,
                                    dt=ref["contact_duration"] / p["clock.steps_per_contact"])
         axis, sign = (0, -1.0) if test == 1 else (2, 1.0)

@@ -13,7 +13,7 @@ from fem_region import materials, mesh
 from fem_region.explicit import ExplicitDynamics
 
 from ..checks import bound
-from ..params import isotropic_material, Param, particle_radius, positive
+from ..params import isotropic_material, Param, particle_size, positive
 from ..participants.fem import make_region
 from ..participants.coupled import COUPLING, coupled_simulation
 
@@ -25,7 +25,7 @@ PARAMETERS = {
     "geometry.fem_length": positive(0.04, "FEM block length", "m"),
     "geometry.dem_length": positive(0.04, "lattice length", "m"),
     "geometry.height": positive(0.02, "height", "m"),
-    "particle.radius": particle_radius(0.001, "lattice sphere radius"),
+    "zone.particle_size": particle_size(0.002, "particle size d (diameter; the lattice spacing)"),
     "mesh.element_size": positive(0.004, "FEM element size", "m"),
     "motion.velocity_x": Param(1.0, "initial drift velocity x", unit="m/s"),
     "motion.velocity_y": Param(0.5, "initial drift velocity y", unit="m/s"),
@@ -41,7 +41,7 @@ PARAMETERS = {
 def lattice_block(p: dict, x0: float, x1: float, height: float, interface_x: float):
     """Hexagonal layer over [x0, x1] x [0, height] calibrated to material.E / material.rho;
     particles at x <= interface_x form the interface band."""
-    r = p["particle.radius"]
+    r = 0.5 * p["zone.particle_size"]
     x = packing.hexagonal_2d((x0, 0.0), (x1, height), r)
     bonds = packing.neighbour_bonds(x, r)
     kn = calibration.hexagonal_kn(p["material.E"], r)
@@ -51,7 +51,7 @@ def lattice_block(p: dict, x0: float, x1: float, height: float, interface_x: flo
 
 def build(p: dict, mode: str, dem: str):
     Lf, Ld, H, h = p["geometry.fem_length"], p["geometry.dem_length"], p["geometry.height"], p["mesh.element_size"]
-    r = p["particle.radius"]
+    r = 0.5 * p["zone.particle_size"]
     m = mesh.rectangle(np.linspace(0, Lf, max(1, round(Lf / h)) + 1), np.linspace(0, H, max(1, round(H / h)) + 1),
                        p["mesh.element"])
     D = materials.plane_stress(materials.isotropic(p["material.E"], 1 / 3))

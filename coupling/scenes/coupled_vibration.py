@@ -16,7 +16,7 @@ from fem_region import materials, mesh
 from fem_region.explicit import ExplicitDynamics, PrescribedMotion
 
 from ..checks import bound
-from ..params import isotropic_material, Param, particle_radius, positive
+from ..params import isotropic_material, Param, particle_size, positive
 from ..participants.fem import make_region
 from ..participants.coupled import COUPLING, coupled_simulation
 
@@ -25,7 +25,7 @@ DESCRIPTION = "coupled: undamped FEM + lattice cantilever, energy drift over 10^
 MODES = ("coupled",)
 PARAMETERS = {
     **isotropic_material(10e9, 2000.0),
-    "particle.radius": particle_radius(0.0005, "lattice sphere radius"),
+    "zone.particle_size": particle_size(0.001, "particle size d (diameter; the lattice spacing)"),
     "geometry.length": positive(0.04, "beam length (half FEM, half lattice)", "m"),
     "geometry.height": positive(0.004, "beam depth", "m"),
     "mesh.spacing_ratio": Param(2, "FEM element size / lattice spacing", kind="int", low=1, high=8),
@@ -39,7 +39,7 @@ PARAMETERS = {
 
 
 def build(p: dict, mode: str, dem: str):
-    r = p["particle.radius"]
+    r = 0.5 * p["zone.particle_size"]
     d = 2 * r
     h = p["mesh.spacing_ratio"] * d
     L, H = p["geometry.length"], p["geometry.height"]

@@ -63,7 +63,7 @@ def domain(p: dict) -> tuple[tuple[float, float], list[str]]:
     """((x_a, x_b) the DEM window in m, warnings), or CaseError: see validity."""
     dl.check_resolution(p)
     cf = closed_form(p)
-    return window(p, cf, final_crack_length(p, cf)), dl.strength_warnings(p, 2 * p["particle.radius"])
+    return window(p, cf, final_crack_length(p, cf)), dl.strength_warnings(p, p["zone.particle_size"])
 
 
 def final_crack_length(p: dict, cf: dict) -> float:
@@ -82,7 +82,7 @@ def window(p: dict, cf: dict, a_end: float) -> tuple[float, float]:
     if a0 < 8 * h:
         raise CaseError(f"geometry.crack_length = {a0:g}: shorter than 8 arm thicknesses (8 h = {8 * h:g} m); "
                         "corrected beam theory is the check only for slender arms; allowed: >= 8 h")
-    Z0 = dl.resolved_strengths(p, 2 * p["particle.radius"])[0]
+    Z0 = dl.resolved_strengths(p, p["zone.particle_size"])[0]
     ahead = max(p["dem.margin"], dl.cohesive_zone_length(p, p["interface.GIc"], Z0, "I"))
     x_b, limit = a_end + ahead, L - 4 * h
     if x_b > limit:
@@ -136,7 +136,7 @@ def evaluate(p: dict, h: dict, mode: str):
     P, delta = np.asarray(h["load"]), np.asarray(h["opening"])
     tip, D = np.asarray(h["crack_tip"]), np.asarray(h["interface_dissipated"])
     k = dl.peak_before_growth(P, tip, p["geometry.crack_length"], 1e-3)
-    Z0, R0 = dl.resolved_strengths(p, 2 * p["particle.radius"])
+    Z0, R0 = dl.resolved_strengths(p, p["zone.particle_size"])
     qoi = {"Z0_used": Z0, "R0_used": R0, "peak_load": float(P[k]), "opening_at_peak": float(delta[k])}
     qoi["initial_compliance"] = dl.initial_compliance(P, delta, k, 0.4)
     qoi.update(dl.cohesive_zone_qoi(p, h, k, p["interface.GIc"], Z0, "I"))

@@ -72,7 +72,7 @@ PARAMETERS: dict[str, Param] = {
                                            "sqrt(9 pi E22 Gc / (32 N d)) are lowered to it (Turon et al. 2007); "
                                            "0 keeps the given strengths", low=0.0, high=50.0),
     "interface.friction": Param(0.0, "Coulomb friction of debonded faces in contact", low=0.0, high=1.0),
-    "particle.radius": ranged(0.13e-3, "DEM particle radius r (spacing d = 2r), at most h / 12", "m", 50e-6, 0.5e-3),
+    "zone.particle_size": ranged(0.26e-3, "DEM particle size d (the lattice spacing), at most h / 6", "m", 100e-6, 1e-3),
     "mesh.elements_through": Param(3, "FEM elements through each arm outside the band", kind="int", low=1, high=40),
     "mesh.element_length": Param(0.0, "FEM element length along the beam; 0 = 2 d", unit="m", low=0.0),
     "load.ramp_time": Param(0.0, "time over which the load-point speed ramps up; 0 = two periods of the "
@@ -125,7 +125,7 @@ def build_specimen(p: dict, a0: float, x_a: float, x_b: float, omega_arm: float,
     ``stations`` (m): x of supports and load lines, which get a line of mesh nodes. The
     particle size is the caller's to check (check_resolution, in each specimen's validity)."""
     h, L = p["geometry.arm_thickness"], p["geometry.length"]
-    r = p["particle.radius"]
+    r = 0.5 * p["zone.particle_size"]
     d = 2 * r
     band = d  # half-thickness of the window cut out of the FEM
     E11, E22, G13 = p["material.E11"], p["material.E22"], p["material.G13"]
@@ -231,10 +231,10 @@ def check_resolution(p: dict) -> None:
     """Refuses (CaseError) particles coarser than a sixth of the arm: the DEM strip then stands
     for too much of the arm's bending (measured on a DCB with d = h / 4.2: compliance 6.2 % and
     propagation RMS 10.9 % off; with d = h / 6, 1.5 % and 3.9 %)."""
-    r, h = p["particle.radius"], p["geometry.arm_thickness"]
-    if 2 * r > h / 6 * (1 + 1e-9):
-        raise CaseError(f"particle.radius = {r:g}: coarser than a sixth of the arm (spacing 2 r = {2 * r:g} m, "
-                        f"h = {h:g} m); allowed <= h / 12 = {h / 12:g} m")
+    d, h = p["zone.particle_size"], p["geometry.arm_thickness"]
+    if d > h / 6 * (1 + 1e-9):
+        raise CaseError(f"zone.particle_size = {d:g}: coarser than a sixth of the arm (h = {h:g} m); "
+                        f"allowed <= h / 6 = {h / 6:g} m")
 
 
 def resolved_strengths(p: dict, d: float) -> tuple[float, float]:
@@ -256,7 +256,7 @@ def resolved_strengths(p: dict, d: float) -> tuple[float, float]:
         if p[gkey] < tau**2 / (2 * K):
             raise CaseError(f"{gkey} = {p[gkey]:g}: below the elastic energy at initiation {key}^2 / (2 K) = "
                             f"{tau**2 / (2 * K):.4g} J/m^2 (K = E22 / d, d = {d:g} m); allowed: {gkey} >= that, "
-                            f"a lower {key}, or a smaller particle.radius")
+                            f"a lower {key}, or a smaller zone.particle_size")
     return Z0, R0
 
 
@@ -286,7 +286,7 @@ def strength_warnings(p: dict, d: float) -> list[str]:
         if rice < 2 * d:
             out.append(f"{key} = {tau:.4g} Pa: its cohesive zone (Rice, {1e3 * rice:.3g} mm) spans fewer than 2 "
                        f"bonds of d = {d:g} m, so initiation follows the strength rather than {gkey}; for the "
-                       "checks: interface.cohesive_zone_bonds >= 2, or a smaller particle.radius")
+                       "checks: interface.cohesive_zone_bonds >= 2, or a smaller zone.particle_size")
     for key, given, used in (("interface.Z0", p["interface.Z0"], Z0), ("interface.R0", p["interface.R0"], R0)):
         if used < given:
             out.append(f"{key} lowered from {given:.4g} to {used:.4g} Pa: its cohesive zone then spans "
@@ -310,7 +310,7 @@ def softening_bonds(bonds: LawBonds) -> float:
 def cohesive_zone_qoi(p: dict, h: dict, k: int, Gc: float, tau: float, mode: str) -> dict:
     """The cohesive zone in bonds: measured (the most pairs softening at once up to the peak
     load, sample k, when the zone has formed) and estimated (cohesive_zone_length / d)."""
-    d = 2 * p["particle.radius"]
+    d = p["zone.particle_size"]
     zone = np.asarray(h.get("cohesive_zone_bonds", [np.nan]))[: k + 1]
     return {"cohesive_zone_bonds": float(np.max(zone)) if zone.size else float("nan"),
             "cohesive_zone_bonds_estimate": cohesive_zone_length(p, Gc, tau, mode) / d}
@@ -336,7 +336,7 @@ def growth_and_dissipation(p: dict, tip: np.ndarray, D: np.ndarray, after: np.nd
     crack has run more than 8 particle radii (the process zone has formed)."""
     a0 = p["geometry.crack_length"]
     growth = float(np.nanmax(tip) - a0) if np.isfinite(tip).any() else 0.0
-    grow = after & np.isfinite(tip) & (tip > a0 + 8 * p["particle.radius"])
+    grow = after & np.isfinite(tip) & (tip > a0 + 4 * p["zone.particle_size"])
     if grow.sum() > 3 and np.ptp(tip[grow]) > 0:
         return growth, float(np.polyfit(p["geometry.width"] * tip[grow], D[grow], 1)[0] / Gc)
     return growth, float("nan")

@@ -86,7 +86,7 @@ def validity(p: dict, mode: str = "II", share: float = 0.3) -> list[str]:
         raise CaseError(f"geometry.half_span = {L:g}: shorter than 8 arm thicknesses (8 h = {8 * h:g} m): not a "
                         "beam; allowed >= 8 h")
     dl.check_resolution(p)
-    return dl.strength_warnings(p, 2 * p["particle.radius"]) + bending_warnings(p, mode, share)
+    return dl.strength_warnings(p, p["zone.particle_size"]) + bending_warnings(p, mode, share)
 
 
 def bending_specimen(p: dict, dem: str, cf: dict, single_leg: bool, warnings: list[str]):
@@ -138,7 +138,7 @@ def bending_warnings(p: dict, mode: str = "II", share: float = 0.3) -> list[str]
     closed form gives to the crack tip (measured on enf_coarse, h = 3 mm, estimate 8 mm: peak
     3.0 % below beam theory at min(a0, L - a0) = 25 mm, 5.2 % at 20 mm, 7.5 % at 15 mm), and a
     zone shorter than 4 bonds is not resolved."""
-    L, a0, d = p["geometry.half_span"], p["geometry.crack_length"], 2 * p["particle.radius"]
+    L, a0, d = p["geometry.half_span"], p["geometry.crack_length"], p["zone.particle_size"]
     Z0, R0 = dl.resolved_strengths(p, d)
     Gc, tau = (p["interface.GIc"], Z0) if mode == "I" else (p["interface.GIIc"], R0)
     l_cz = dl.cohesive_zone_length(p, Gc, tau, mode)
@@ -149,7 +149,7 @@ def bending_warnings(p: dict, mode: str = "II", share: float = 0.3) -> list[str]
                    "check: a longer geometry.half_span or a0 nearer L / 2, or a higher strength")
     if l_cz < 4 * d:
         out.append(f"the mode {mode} cohesive zone (about {1e3 * l_cz:.3g} mm) spans fewer than 4 bonds of d = {d:g} m: "
-                   "the peak load is not resolved; for the check: a smaller particle.radius, or "
+                   "the peak load is not resolved; for the check: a smaller zone.particle_size, or "
                    "interface.cohesive_zone_bonds > 0 (lowers the strengths)")
     return out
 
@@ -159,7 +159,7 @@ def evaluate(p: dict, h: dict, mode: str):
     P, delta = np.asarray(h["load"]), np.asarray(h["deflection"])
     tip, D = np.asarray(h["crack_tip"]), np.asarray(h["interface_dissipated"])
     k = dl.peak_before_growth(P, tip, p["geometry.crack_length"], 1e-3)
-    Z0, R0 = dl.resolved_strengths(p, 2 * p["particle.radius"])
+    Z0, R0 = dl.resolved_strengths(p, p["zone.particle_size"])
     qoi = {"Z0_used": Z0, "R0_used": R0, "peak_load": float(P[k]), "deflection_at_peak": float(delta[k]),
            "peak_load_uncorrected_ref": float(cf["P_peak_uncorrected"])}
     qoi["initial_compliance"] = dl.initial_compliance(P, delta, k, 0.5)

@@ -25,7 +25,7 @@ from fem_region import materials, mesh
 from fem_region.explicit import ExplicitDynamics
 
 from ..checks import bound
-from ..params import isotropic_material, Param, particle_radius
+from ..params import isotropic_material, Param, particle_size
 from ..participants.fem import make_region
 from ..participants.coupled import COUPLING, coupled_simulation
 
@@ -34,7 +34,7 @@ DESCRIPTION = "coupled: uniform strain across the interface, no spurious interfa
 MODES = ("coupled",)
 PARAMETERS = {
     **isotropic_material(10e9, 2000.0),
-    "particle.radius": particle_radius(0.0005, "lattice sphere radius (spacing 2r)"),
+    "zone.particle_size": particle_size(0.001, "particle size d (diameter; the lattice spacing)"),
     "geometry.fem_columns": Param(4, "FEM elements along x", kind="int", low=1),
     "geometry.rows": Param(5, "FEM elements along y", kind="int", low=2),
     "geometry.lattice_columns": Param(8, "free lattice columns", kind="int", low=3),
@@ -50,7 +50,7 @@ PARAMETERS = {
 
 
 def build(p: dict, mode: str, dem: str):
-    r = p["particle.radius"]
+    r = 0.5 * p["zone.particle_size"]
     d = 2 * r
     h = p["mesh.spacing_ratio"] * d
     nx, ny = p["geometry.fem_columns"], p["geometry.rows"]
@@ -104,7 +104,7 @@ def evaluate(p: dict, h: dict, mode: str):
     qoi = {k: float(h[k][-1]) for k in ("max_interface_residual_rel", "max_free_particle_force_rel", "interface_force_rel")}
     src = "uniform strain is an equilibrium state of both sides"
     strain = max(abs(p["strain.xx"]), abs(p["strain.yy"]), abs(p["strain.xy"]))
-    d = 2 * p["particle.radius"]
+    d = p["zone.particle_size"]
     extent = (p["geometry.fem_columns"] * p["mesh.spacing_ratio"] + p["geometry.lattice_columns"]) * d
     roundoff = 50 * np.finfo(float).eps * extent / (strain * d)
     return qoi, {"max_interface_residual_rel": bound(qoi["max_interface_residual_rel"], 2 * strain + 1e-9,

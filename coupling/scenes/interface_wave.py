@@ -20,7 +20,7 @@ from fem_region.explicit import ExplicitDynamics, PrescribedMotion
 from fem_region.loads import sine_squared
 
 from ..checks import bound
-from ..params import isotropic_material, Param, particle_radius, positive
+from ..params import isotropic_material, Param, particle_size, positive
 from ..participants.fem import make_region
 from ..participants.coupled import COUPLING, coupled_simulation
 
@@ -29,7 +29,7 @@ DESCRIPTION = "coupled: pulse FEM -> DEM -> FEM, reflected < 2 %, transmitted > 
 MODES = ("coupled",)
 PARAMETERS = {
     **isotropic_material(1e9, 1000.0),
-    "particle.radius": particle_radius(0.005, "sphere radius = half the FEM element length"),
+    "zone.particle_size": particle_size(0.01, "particle size d (diameter) = the FEM element length"),
     "chain.left_elements": Param(60, "elements in the left strip", kind="int", low=10),
     "chain.particles": Param(40, "chain particles between the strips", kind="int", low=2),
     "chain.right_elements": Param(80, "elements in the right strip", kind="int", low=10),
@@ -43,7 +43,7 @@ PARAMETERS = {
 
 
 def _strips(p):
-    r = p["particle.radius"]
+    r = 0.5 * p["zone.particle_size"]
     le = 2 * r
     n1, nd, n2 = p["chain.left_elements"], p["chain.particles"], p["chain.right_elements"]
     a = mesh.rectangle(np.linspace(0, n1 * le, n1 + 1), np.array([0.0, le]))
@@ -56,7 +56,7 @@ def _strips(p):
 
 def build(p: dict, mode: str, dem: str):
     m, le, left_el, x0 = _strips(p)
-    r, E, rho = p["particle.radius"], p["material.E"], p["material.rho"]
+    r, E, rho = 0.5 * p["zone.particle_size"], p["material.E"], p["material.rho"]
     c = np.sqrt(E / rho)
     A = le * le
     n1, nd = p["chain.left_elements"], p["chain.particles"]

@@ -61,7 +61,7 @@ def evaluate(p: dict, h: dict, mode: str):
     tip, D = np.asarray(h["crack_tip"]), np.asarray(h["interface_dissipated"])
     a0 = p["geometry.crack_length"]
     k = dl.peak_before_growth(P, tip, a0, 1e-3)
-    Z0, R0 = dl.resolved_strengths(p, 2 * p["particle.radius"])
+    Z0, R0 = dl.resolved_strengths(p, p["zone.particle_size"])
     qoi = {"Z0_used": Z0, "R0_used": R0, "peak_load": float(P[k]), "deflection_at_peak": float(delta[k]), "mode_ratio_GII_G": cf["B"]}
     qoi["initial_compliance"] = dl.initial_compliance(P, delta, k, 0.5)
     qoi.update(dl.cohesive_zone_qoi(p, h, k, p["interface.GIIc"], R0, "II"))

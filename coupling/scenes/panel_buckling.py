@@ -41,13 +41,13 @@ base deflection B are reported too (the film's and the base's growth are not an 
 so they read 30 % high and 10 % low). The tips' energy release rate at the limit load comes
 from Hutchinson & Suo; growth itself is not modelled (Table 2 gives no toughness).
 
-The film's membrane strain is read over a gauge that stops dem.window_behind short of each
+The film's membrane strain is read over a gauge that stops zone.window_behind short of each
 tip (the same in both modes; near the tips the film is not yet free).
 
 Modes: ``fem`` (the delamination cannot grow) and ``coupled``: a DEM window at each tip, the
 four-row band of delamination.py across the delamination plane (particle spacing d = 2 r =
-two plies; the FEM above and below it tied to the outer rows), dem.window_behind into the
-delamination and dem.window_ahead into the intact laminate. Across the plane the seed's
+two plies; the FEM above and below it tied to the outer rows), zone.window_behind into the
+delamination and zone.window_ahead into the intact laminate. Across the plane the seed's
 Hashin law with linear softening (Z0, R0 of Table 2; Gc not in Table 2: Table 1's
 graphite/epoxy GIc = 147, GIIc = 526 J/m^2, B-K), debonded inside the delamination (contact
 only), intact ahead, in corotated kinematics (LawBonds finite_rotation): the panel's bow turns
@@ -69,7 +69,7 @@ from fem_region.explicit import ExplicitDynamics, PrescribedMotion
 from fem_region.modal import lowest_modes
 
 from ..checks import bound, check, within
-from ..params import density, modulus, Param, particle_radius, positive
+from ..params import density, modulus, Param, particle_size, positive
 from . import delamination as dl
 from ..participants.fem import FEM_OPTIONS, FemNodes, fem_only, make_region
 from ..participants.coupled import COUPLING, coupled_simulation
@@ -114,14 +114,14 @@ PARAMETERS = {
                                            low=0.0, high=50.0),
     "interface.friction": Param(0.0, "Coulomb friction of the delaminated faces in the DEM windows", low=0.0,
                                 high=2.0),
-    "particle.radius": particle_radius(0.127e-3, "DEM particle radius r (coupled mode; spacing d = 2 r)"),
-    "dem.window_ahead": positive(16e-3, "DEM window ahead of each tip, into the intact laminate (room to grow; "
+    "zone.particle_size": particle_size(0.254e-3, "DEM particle size d (coupled mode; the lattice spacing)"),
+    "zone.window_ahead": positive(16e-3, "DEM window ahead of each tip, into the intact laminate (room to grow; "
                                  "the default leaves 3 mm to the clamps: with Table 1's toughness the delamination "
                                  "runs from the limit load through a 14 mm window)", "m"),
     # behind the tip the window holds the film's lower half as two particle rows: 2 mm of it
     # made the film's clamped ends 3 % softer (coupled elastic 5.75 kN against all-FEM 5.94 kN
     # on the coarse mesh; 0.5 mm: 5.94 against 5.97 kN)
-    "dem.window_behind": positive(0.5e-3, "DEM window behind each tip, inside the delamination; also where the "
+    "zone.window_behind": positive(0.5e-3, "DEM window behind each tip, inside the delamination; also where the "
                                   "film strain gauge stops short of the tips (both modes)", "m"),
     **COUPLING,
     "mesh.elements_along": Param(148, "elements along the panel", kind="int", low=20),
@@ -223,15 +223,15 @@ def build(p: dict, mode: str, dem: str):
         return dyn
 
     # the sublaminate's membrane strain: mean of its two faces' arc lengths (bending strains
-    # cancel) over a gauge that stops dem.window_behind short of the tips (FEM in both modes;
+    # cancel) over a gauge that stops zone.window_behind short of the tips (FEM in both modes;
     # the membrane force of a film without face tractions is the same all along it)
-    g1, g2 = x1 + p["dem.window_behind"], x2 - p["dem.window_behind"]
+    g1, g2 = x1 + p["zone.window_behind"], x2 - p["zone.window_behind"]
     gauge = (X0[0] >= g1 - 1e-9 * L) & (X0[0] <= g2 + 1e-9 * L)
     top_face = np.flatnonzero(gauge & (np.abs(X0[1] - H) < 1e-9 * H))
     crack_face = np.flatnonzero(gauge & upper & (np.abs(X0[1] - yc) < 1e-9 * H))
     faces = [f[np.argsort(X0[0, f])] for f in (top_face, crack_face)]
     if not all(len(f) > 1 and np.array_equal(X0[0, f], X0[0, faces[0]]) for f in faces):
-        raise CaseError(f"dem.window_behind = {p['dem.window_behind']:g}: the film gauge needs FEM crack faces "
+        raise CaseError(f"zone.window_behind = {p['zone.window_behind']:g}: the film gauge needs FEM crack faces "
                         f"between the windows; allowed below {0.45 * l:g} m")
 
     bonds = None  # (every input checked above: no engine starts for a refused case)
@@ -284,7 +284,7 @@ def panel_region(p: dict, win: list):
     H, h = p["geometry.plies"] * tp, p["geometry.sublaminate_plies"] * tp
     yc, x1, x2 = H - h, 0.5 * (L - l), 0.5 * (L + l)
     dx = L / p["mesh.elements_along"]
-    d = 2 * p["particle.radius"]
+    d = p["zone.particle_size"]
     band = d if win else 0.0  # the windows' half-height cut out of the FEM
     xs = np.linspace(0, L, p["mesh.elements_along"] + 1)
     for xa, xb in win:  # the windows' own lines; none closer than half an element to their edges
@@ -327,16 +327,16 @@ def imperfect(p: dict, X: np.ndarray, upper: np.ndarray, x1: float, x2: float, H
 
 def windows(p: dict, x1: float, x2: float, h: float, yc: float) -> list[tuple[float, float]]:
     """[(x_a, x_b)] m of the two DEM windows, whole particle spacings d, each tip on a column:
-    dem.window_ahead into the intact laminate and dem.window_behind into the delamination."""
+    zone.window_ahead into the intact laminate and zone.window_behind into the delamination."""
     from ..params import CaseError
-    d = 2 * p["particle.radius"]
+    d = p["zone.particle_size"]
     if 2 * d > h or 2 * d > yc:
-        raise CaseError(f"particle.radius = {p['particle.radius']:g}: the band (four rows, 4 r = {2 * d:g} m across "
-                        f"the plane) needs the sublaminate and the base thicker than it; allowed <= {min(h, yc) / 4:g} m")
-    n_out = max(2, int(round(p["dem.window_ahead"] / d)))
-    n_in = max(2, int(round(p["dem.window_behind"] / d)))
+        raise CaseError(f"zone.particle_size = {d:g}: the band (four rows, {2 * d:g} m across the plane) needs the "
+                        f"sublaminate and the base thicker than it; allowed <= {min(h, yc) / 2:g} m")
+    n_out = max(2, int(round(p["zone.window_ahead"] / d)))
+    n_in = max(2, int(round(p["zone.window_behind"] / d)))
     if x1 - n_out * d < 0.1 * x1 or x1 + n_in * d >= 0.5 * (x1 + x2) - d:
-        raise CaseError(f"dem.window_ahead = {p['dem.window_ahead']:g}, dem.window_behind = {p['dem.window_behind']:g}: "
+        raise CaseError(f"zone.window_ahead = {p['zone.window_ahead']:g}, zone.window_behind = {p['zone.window_behind']:g}: "
                         f"the windows must stay off the clamps (a tenth of the intact ends) and apart; allowed ahead "
                         f"<= {0.9 * x1:g} m, behind < {0.45 * (x2 - x1):g} m")
     return [(x1 - n_out * d, x1 + n_in * d), (x2 - n_in * d, x2 + n_out * d)]
@@ -349,7 +349,7 @@ def window_scene(p: dict, win, D: np.ndarray, x1: float, x2: float, yc: float, H
     tips turn with the panel's bow by more than the film's critical strain)."""
     from dem_region.ply_lattice import lattice_stiffness, slice_moduli
     from dem_region.scene import DemScene
-    r, b, rho = p["particle.radius"], p["geometry.width"], p["material.rho"]
+    r, b, rho = 0.5 * p["zone.particle_size"], p["geometry.width"], p["material.rho"]
     d = 2 * r
     E_x, E_y, G = slice_moduli(D)
     K = E_y / d
@@ -535,7 +535,7 @@ def evaluate(p: dict, h: dict, mode: str):
         near_clamp = qoi["intact_end_beyond_window"] <= 0.2 * 0.5 * (p["geometry.length"] - p["geometry.delamination_length"])
         checks["growth_not_window_limited"] = bound(qoi["growth_reached_window_edge"] * (not near_clamp), 0.0,
                                                     "the delamination stopped inside the DEM windows, or they reach "
-                                                    "the clamps' neighbourhood (else raise dem.window_ahead)")
+                                                    "the clamps' neighbourhood (else raise zone.window_ahead)")
         checks["dissipated_per_new_area"] = within(qoi["dissipated_per_new_area"], p["interface.GIc"],
                                                    p["interface.GIIc"], "energy: the interface dissipates between "
                                                    "GIc and GIIc per new crack area (B-K toughness range)")
@@ -548,7 +548,7 @@ def growth(p: dict, h: dict, P: np.ndarray, eps_film: float) -> dict:
     for a film buckled at its measured critical strain with the B-K toughness of that mix."""
     E, b = p["material.E11"], p["geometry.width"]
     H, h_sub = p["geometry.plies"] * p["geometry.ply_thickness"], p["geometry.sublaminate_plies"] * p["geometry.ply_thickness"]
-    l, d = p["geometry.delamination_length"], 2 * p["particle.radius"]
+    l, d = p["geometry.delamination_length"], p["zone.particle_size"]
     gl, gr = np.asarray(h["growth_left"]), np.asarray(h["growth_right"])
     k = int(np.argmax(P))
     grown = np.flatnonzero(np.maximum(gl, gr) >= 2 * d - 1e-9 * d)
@@ -563,7 +563,7 @@ def growth(p: dict, h: dict, P: np.ndarray, eps_film: float) -> dict:
            "interface_dissipated": float(np.asarray(h["interface_dissipated"])[-1])}
     # the window's last column is tied to intact FEM: a tip can run (n_out - 1) spacings; the
     # intact end left beyond that, from the clamp
-    room = (int(round(p["dem.window_ahead"] / d)) - 1) * d
+    room = (int(round(p["zone.window_ahead"] / d)) - 1) * d
     out["growth_room"] = room
     out["growth_reached_window_edge"] = float(max(gl.max(), gr.max()) >= room - 1e-9 * d)
     out["intact_end_beyond_window"] = float(0.5 * (p["geometry.length"] - l) - room - d)

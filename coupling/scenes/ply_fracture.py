@@ -27,7 +27,7 @@ from dem_region.scene import DemScene
 from physics.failure import HoffmanStrengths
 
 from ..checks import check
-from ..params import density, modulus, Param, particle_radius, positive
+from ..params import density, modulus, Param, particle_size, positive
 from ..participants.dem import dem_only
 
 NAME = "ply_fracture"
@@ -59,7 +59,7 @@ PARAMETERS = {
     **PLY,
     "ply.angle": Param(90.0, "0: pull along the fibres; 90: fibres out of the slice's plane", choices=None,
                        low=0.0, high=90.0),
-    "particle.radius": particle_radius(0.0625e-3, "particle radius r (spacing d = 2r)"),
+    "zone.particle_size": particle_size(0.125e-3, "particle size d (the lattice spacing)"),
     "geometry.length": positive(1.5e-3, "strip length (below 2 E Gf / X^2, so that the strip's elastic energy "
                                 "cannot break a second section)", "m"),
     "geometry.height": positive(2e-3, "strip height", "m"),
@@ -100,7 +100,7 @@ def build(p: dict, mode: str, dem: str):
     from ..params import CaseError
     if p["ply.angle"] not in (0.0, 90.0):
         raise CaseError(f"ply.angle = {p['ply.angle']:g}: allowed 0 or 90 (a beam slice's plies)")
-    d = 2 * p["particle.radius"]
+    d = p["zone.particle_size"]
     nx, ny = int(round(p["geometry.length"] / d)) + 1, max(2, int(round(p["geometry.height"] / d)))
     mat = ply_material(p)
     lat = ply_lattice.build(0.0, nx, 0.0, [ny], [p["ply.angle"]], d, mat)
@@ -142,14 +142,14 @@ def effective_rows(p: dict) -> float:
     """Rows' worth of C_xx the strip carries: the free top and bottom rows miss half of their
     cells' diagonals, so a strip of ny rows carries ny - k_2 / (k_x + k_2) (for force and for
     the fracture energy, which is shared between the families in proportion to stiffness)."""
-    ny = max(2, int(round(p["geometry.height"] / (2 * p["particle.radius"]))))
+    ny = max(2, int(round(p["geometry.height"] / (p["zone.particle_size"]))))
     kx, _, k2 = ply_lattice.lattice_stiffness(*ply_material(p).in_plane(p["ply.angle"]), 1.0)
     return ny - k2 / (kx + k2)
 
 
 def evaluate(p: dict, h: dict, mode: str):
     X, Gf = strength(p)
-    d = 2 * p["particle.radius"]
+    d = p["zone.particle_size"]
     ny = max(2, int(round(p["geometry.height"] / d)))
     area = ny * d * d
     eff = effective_rows(p) / ny

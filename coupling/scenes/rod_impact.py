@@ -24,8 +24,8 @@ softening, contact and friction after debonding) that the coupling layer evaluat
 FEM nodes (dem_region/law_bonds.py, the same code as on particles); rigid rod in penalty
 contact (contact.penalty) with the top surface.
 
-Modes: fem (the above), and coupled: a particle zone, the square [0, dem.half_width]^2 under
-the rod through both layers (3D ply lattice of spacing dem.particle_size, dem_region/
+Modes: fem (the above), and coupled: a particle zone, the square [0, zone.half_width]^2 under
+the rod through both layers (3D ply lattice of spacing zone.particle_size, dem_region/
 ply_block.py: each layer's E11, E22, G12, G23 on a cubic lattice, the layer interface as
 Hashin bonds with K = E22 / d, the material they replace, and rotation-free slip along both
 in-plane directions), the rod on the top particles (penalty contact.penalty x d^2, its edge
@@ -33,7 +33,7 @@ rounded by the particle radius so a particle beside it is pushed aside, not foun
 the face), the FEM plate around it (an O-grid: the hole is the zone's square exactly, the
 layers' node bonds as in fem mode), the zone's outer faces x = a, y = a kinematically tied to
 it, its faces x = 0, y = 0 on the symmetry planes. The plies stay elastic (Table 3 has no ply
-strengths), as in fem mode; dem.ply_failure = true lets them fail by Hoffman with the
+strengths), as in fem mode; zone.ply_failure = true lets them fail by Hoffman with the
 carbon/epoxy strengths of 5.1 (at 100 m/s the layers then crack through under the rod).
 
 How the program detects a bad setting: before the first step (exit 2) a step above the
@@ -119,11 +119,11 @@ PARAMETERS = {
     "rod.velocity": positive(100.0, "impact speed", "m/s"),
     # coupled mode: the particle zone under the rod (ply strengths and energies: carbon/epoxy, as 5.1)
     **{k: v for k, v in PLY.items() if k.startswith(("strength.", "fracture."))},
-    "dem.ply_failure": Param(False, "intralaminar failure (Hoffman, strength.* and fracture.*) in the particle "
+    "zone.ply_failure": Param(False, "intralaminar failure (Hoffman, strength.* and fracture.*) in the particle "
                              "zone; off: elastic layers as in the paper (Table 3 has interface strengths only)",
                              kind="bool"),
-    "dem.half_width": positive(30e-3, "half side of the square particle zone under the rod (coupled)", "m"),
-    "dem.particle_size": positive(3e-3, "particle spacing d (divides the layer thickness and dem.half_width)", "m"),
+    "zone.half_width": positive(30e-3, "half side of the square particle zone under the rod (coupled)", "m"),
+    "zone.particle_size": positive(3e-3, "particle spacing d (divides the layer thickness and zone.half_width)", "m"),
     **COUPLING,
 }
 T_END = 0.4e-3
@@ -137,7 +137,7 @@ def layer_C(p: dict, angle: float) -> np.ndarray:
 
 def core_cells(p: dict) -> int:
     """Grid cells along each side of the square hole the DEM zone fills (coupled mode)."""
-    return max(1, int(round(p["mesh.radial"] * p["dem.half_width"] / p["geometry.radius"])))
+    return max(1, int(round(p["mesh.radial"] * p["zone.half_width"] / p["geometry.radius"])))
 
 
 def _map(u: np.ndarray, v: np.ndarray, p: dict, core: bool) -> tuple[np.ndarray, np.ndarray]:
@@ -148,7 +148,7 @@ def _map(u: np.ndarray, v: np.ndarray, p: dict, core: bool) -> tuple[np.ndarray,
     R = p["geometry.radius"]
     if not core:
         return R * u * np.sqrt(1 - v**2 / 2), R * v * np.sqrt(1 - u**2 / 2)
-    a, s = p["dem.half_width"], core_cells(p) / p["mesh.radial"]
+    a, s = p["zone.half_width"], core_cells(p) / p["mesh.radial"]
     rho = np.maximum(u, v)
     w = np.clip((rho - s) / (1 - s), 0.0, 1.0)[None]
     uv = np.array([u, v])
@@ -163,7 +163,7 @@ def plate_mesh(p: dict, core: bool = False) -> tuple[skfem.MeshHex1, np.ndarray,
     """Quarter disc of two layers (Hex8), the interface nodes doubled: (mesh, layer of each
     element (nel,), interface pairs (k, 2) lower / upper node, grid key (n_nodes,) of each
     node on the structured (radial + 1)^2 grid). core: leave the DEM zone's square
-    [0, dem.half_width]^2 out (coupled mode)."""
+    [0, zone.half_width]^2 out (coupled mode)."""
     n, m, h = p["mesh.radial"], p["mesh.per_layer"], p["geometry.layer_thickness"]
     g = np.linspace(0.0, 1.0, n + 1)
     box = mesh.box(g, g, np.linspace(0.0, 2 * h, 2 * m + 1), "hex8")
@@ -302,10 +302,10 @@ def _with_bonds(energies, families):
 
 # -- coupled: a particle zone under the rod ------------------------------------------------------
 def plate_material(p: dict) -> PlyMaterial:
-    """The layers' material on the lattice: elastic unless dem.ply_failure (Table 3 gives no
+    """The layers' material on the lattice: elastic unless zone.ply_failure (Table 3 gives no
     ply strengths: the paper's plies stay elastic, only the interface fails)."""
     Yt, Yc, S23 = p["strength.Yt"], p["strength.Yc"], p["strength.S23"]
-    if not p["dem.ply_failure"]:
+    if not p["zone.ply_failure"]:
         inf = np.inf
         k = HoffmanStrengths(Xt=inf, Xc=inf, Yt=inf, Yc=inf, Zt=inf, Zc=inf, S23=inf, S13=inf, S12=inf)
         return PlyMaterial(p["plate.E11"], p["plate.E22"], p["plate.G12"], p["plate.G23"], p["plate.rho"], k,
@@ -320,13 +320,13 @@ def particle_zone(p: dict):
     """(block, scene, intralaminar LawBonds, interlaminar LawBonds, rod on the particles):
     the square [0, a]^2 through both layers; columns on x = 0, y = 0 (symmetry) and on
     x = a, y = a (tied to the FEM) carry half cells."""
-    a, d, h = p["dem.half_width"], p["dem.particle_size"], p["geometry.layer_thickness"]
-    for key, length in (("geometry.layer_thickness", h), ("dem.half_width", a)):
+    a, d, h = p["zone.half_width"], p["zone.particle_size"], p["geometry.layer_thickness"]
+    for key, length in (("geometry.layer_thickness", h), ("zone.half_width", a)):
         if abs(length / d - round(length / d)) > 1e-6:
-            raise CaseError(f"dem.particle_size = {d:g}: must divide {key} = {length:g} m")
+            raise CaseError(f"zone.particle_size = {d:g}: must divide {key} = {length:g} m")
     top = min(2 * p["rod.radius"], 0.5 * p["geometry.radius"])
     if not top >= a > p["rod.radius"] + 2 * d:
-        raise CaseError(f"dem.half_width = {a:g}: allowed above the rod radius + 2 particles "
+        raise CaseError(f"zone.half_width = {a:g}: allowed above the rod radius + 2 particles "
                         f"({p['rod.radius'] + 2 * d:g} m) and up to twice the rod radius or half the plate "
                         f"radius ({top:g} m)")
     N, rows = int(round(a / d)) + 1, int(round(h / d))
