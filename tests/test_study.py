@@ -253,3 +253,35 @@ def test_fields_show_the_whole_structure(femdem, tmp_path):
     mid = edges[:, 3]
     u = data["displacement"]
     np.testing.assert_allclose(u[mid], 0.5 * (u[edges[:, 1]] + u[edges[:, 2]]), rtol=1e-12, atol=1e-18)
+
+
+@pytest.mark.parametrize("layup, runs", [("[0_8]", None), ("[0_6/90_4/0_6]", [(0, 6), (90, 4), (0, 6)]),
+                                         ("[90_2/0_4/90_2]", [(90, 2), (0, 4), (90, 2)])])
+def test_the_delaminated_beam_bound_bends_each_run_apart(layup, runs):
+    """The bracket's upper estimate: each run of equal plies bends about its own mid-plane,
+    D = sum E_x t^3 / 12 (a one-run laminate: the intact D, the bracket closes); k scales
+    with D and the deflection with 1 / sqrt(k)."""
+    from coupling.case import load_case
+    from coupling.study import closed_forms
+    from coupling.study.assemble import laminate
+    from dem_region import ply_lattice
+    case = load_case("beam_impact_coarse", {"laminates.beam.layup": layup})
+    p = case.parameters
+    low, high = closed_forms.beam_spring_mass_bracket(case.scene, p)
+    lam = laminate(p, "beam")
+    if runs is None:
+        assert high == pytest.approx(low, rel=1e-12)
+        return
+    t = p["laminates.beam.ply_thickness"]
+    D_apart = sum(ply_lattice.slice_moduli(lam.D(a))[0] * (n * t) ** 3 / 12 for a, n in runs)
+    assert high / low == pytest.approx(np.sqrt(lam.bending_stiffness() / D_apart), rel=1e-12)
+
+
+def test_the_all_dem_seed_beam_lies_in_its_bracket(femdem):
+    """All particles, the seed beam delaminates along its whole span (softer than the intact
+    beam's estimate by 50 %): its peak lies between the intact and delaminated estimates."""
+    code, s, err = femdem("run", "beam_impact_coarse", "--mode", "dem")
+    assert code == 0, err
+    assert_checks(s)
+    q = s["qoi"]
+    assert q["spring_mass_estimate"] < q["peak_centre_displacement"] < q["spring_mass_estimate_upper"]

@@ -32,8 +32,10 @@ def histories(study, p: dict, h: dict, qoi: dict, plots_dir) -> None:
         for check, form in study.layout.names["checks"].items():
             if section(p, f"checks.{check}")["qoi"] in (f"peak_{name}", name):
                 ref = CLOSED_FORMS[form].reference_qoi
-                if ref in qoi:
-                    ax.axhline(scale * qoi[ref], color="k", ls=":", label=ref.replace("_", " "))
+                for key in (ref, ref + "_upper"):
+                    if key in qoi:
+                        ax.axhline(scale * qoi[key], color="k", ls=":" if key == ref else "--",
+                                   label=key.replace("_", " "))
         ax.set(xlabel="time (ms)", ylabel=f"{name.replace('_', ' ')}" + (f" ({unit})" if unit else ""))
         if ax.get_legend_handles_labels()[0]:
             ax.legend(fontsize=7)
