@@ -316,12 +316,21 @@ def _particle_block(built: Built, x_end: float, tied: bool, clamped: bool):
     """(block, engine scene, intralaminar LawBonds, interlaminar LawBonds) on [0, x_end] x
     [0, W / 2] x [0, H]; half cells on the symmetry planes, the free edge and (``tied``) the
     FEM's face; the last column held by a clamp if ``clamped``."""
+    d, p = built.t, built.p
+    M, N = _columns_across(p, d), int(round(x_end / d)) + 1
+    block, intra, inter = _block_with_laws(built, (N, M), [(0, 0), (1, 0), (1, M - 1)] + ([(0, N - 1)] if tied else []))
+    last = np.flatnonzero(block.index[:, 0] == N - 1)
+    groups = {"interface": last} if tied else {"fixed": last} if clamped else {}
+    return block, ply_block.engine_scene(block, groups=groups), intra, inter
+
+
+def _block_with_laws(built: Built, columns: tuple[int, int], half: list):
+    """(3D ply block of ``columns`` (nx, ny) particle columns with cells halved on ``half``,
+    its intralaminar and interlaminar LawBonds)."""
     lam, d, p = built.lam, built.t, built.p
     k = round(d / lam.ply_thickness)
-    M, N = _columns_across(p, d), int(round(x_end / d)) + 1
-    half = [(0, 0), (1, 0), (1, M - 1)] + ([(0, N - 1)] if tied else [])
     try:
-        block = ply_block.build((0.0, 0.0, 0.0), (N, M), [n // k for n in lam.plies], lam.angles, d, lam.material(),
+        block = ply_block.build((0.0, 0.0, 0.0), columns, [n // k for n in lam.plies], lam.angles, d, lam.material(),
                                 half_planes=half)
     except ValueError as exc:
         material = p[f"laminates.{p['geometry.laminate']}.material"]
@@ -333,9 +342,7 @@ def _particle_block(built: Built, x_end: float, tied: bool, clamped: bool):
     law = ply_block.interlaminar_law(block, itf["Z0"], itf["R0"], itf["GIc"], itf["GIIc"])
     inter = LawBonds(block.inter_pairs, block.x, np.tile([0.0, 0.0, 1.0], (len(block.inter_pairs), 1)),
                      block.inter_area, law, friction=itf["friction"], along=block.inter_along, label="interlaminar")
-    last = np.flatnonzero(block.index[:, 0] == N - 1)
-    groups = {"interface": last} if tied else {"fixed": last} if clamped else {}
-    return block, ply_block.engine_scene(block, groups=groups), intra, inter
+    return block, intra, inter
 
 
 def _particle_impactor(p: dict, name: str, built: Built) -> ParticleImpactor:
@@ -383,21 +390,12 @@ def plate(study, p: dict, mode: str, dem: str):
         raise CaseError(f"zone.half_width = {w:g}: allowed between two particle sizes ({2 * d:g} m) and 0.8 x "
                         "the plate's smaller half side")
     tied = mode == "coupled"
-    lam = built.lam
     nx, ny = (int(round(w / d)) + 1,) * 2 if tied else (int(round(a2 / d)) + 1, int(round(b2 / d)) + 1)
-    half = [(0, 0), (1, 0)] + ([(0, nx - 1), (1, ny - 1)] if tied else [])
-    block = ply_block.build((0.0, 0.0, 0.0), (nx, ny), [n // round(d / lam.ply_thickness) for n in lam.plies],
-                            lam.angles, d, lam.material(), half_planes=half)
+    block, intra, inter = _block_with_laws(built, (nx, ny),
+                                           [(0, 0), (1, 0)] + ([(0, nx - 1), (1, ny - 1)] if tied else []))
     i, j = block.index[:, 0], block.index[:, 1]
     to_edge = np.minimum(nx - 1 - i, ny - 1 - j)  # columns to the zone's (or plate's) edge
     edge = np.flatnonzero(to_edge == 0)
-    l = block.x[block.intra_pairs[:, 1]] - block.x[block.intra_pairs[:, 0]]
-    intra = LawBonds(block.intra_pairs, block.x, l, block.intra_area, block.intra_law, volume=block.volume,
-                     label="intralaminar")
-    itf = lam.interface
-    law = ply_block.interlaminar_law(block, itf["Z0"], itf["R0"], itf["GIc"], itf["GIIc"])
-    inter = LawBonds(block.inter_pairs, block.x, np.tile([0.0, 0.0, 1.0], (len(block.inter_pairs), 1)),
-                     block.inter_area, law, friction=itf["friction"], along=block.inter_along, label="interlaminar")
     groups = {"interface": edge} if tied else {"fixed": edge} if clamp else {}
     scene = ply_block.engine_scene(block, groups=groups)
     built.lattice, built.intra, built.inter = block, intra, inter
