@@ -44,8 +44,9 @@ def run(tree: Path, case: str, mode: str, engine: str, sets: list[str], out: Pat
 
 
 def sameness(a: Path, b: Path) -> str:
-    """'bit-identical', or the largest relative difference of a qoi or history series."""
-    worst, name = 0.0, ""
+    """'bit-identical', or the largest relative difference of a qoi or history series (of
+    those both sides have; names on one side only are listed)."""
+    worst, name, alone = 0.0, "", []
     qa, qb = (json.loads((d / "summary.json").read_text())["qoi"] for d in (a, b))
     for k, v in qa.items():
         w = qb.get(k)
@@ -54,7 +55,8 @@ def sameness(a: Path, b: Path) -> str:
             if r >= worst:
                 worst, name = r, f"qoi {k}"
     with h5py.File(a / "history.h5") as fa, h5py.File(b / "history.h5") as fb:
-        for k in fa["history"]:
+        alone = sorted(set(fa["history"]) ^ set(fb["history"]))
+        for k in sorted(set(fa["history"]) & set(fb["history"])):
             x, y = fa["history"][k][()], fb["history"][k][()]
             if x.shape != y.shape:
                 return f"history {k}: {x.shape} against {y.shape} samples"
@@ -62,7 +64,8 @@ def sameness(a: Path, b: Path) -> str:
                 r = float(np.nanmax(np.abs(x - y) / np.maximum(np.abs(x), 1e-300)))
                 if r >= worst:
                     worst, name = r, f"history {k}"
-    return "bit-identical" if not name else f"differs: {worst:.2e} relative ({name})"
+    note = f"; on one side only: {', '.join(alone)}" if alone else ""
+    return ("bit-identical" if not name else f"differs: {worst:.2e} relative ({name})") + note
 
 
 def main() -> None:
