@@ -50,29 +50,35 @@ class Laminate:
     def thickness(self) -> float:
         return sum(self.plies) * self.ply_thickness
 
-    def D(self, angle: float) -> np.ndarray:
-        """(3, 3) plane-strain stiffness Pa of a ply at ``angle`` in the slice."""
+    def stiffness(self, angle: float, dim: int) -> np.ndarray:
+        """(6, 6) Pa of a ply at ``angle`` in the structure's axes: the ply normal along y (2D)
+        or z (3D), the fibres turned about it from x (materials.ply_axes)."""
         m = self.ply
         C = materials.orthotropic(m["E11"], m["E22"], m["E22"], m["nu12"], m["nu12"], m["nu23"], m["G12"], m["G12"],
                                   m["G23"])
-        return materials.plane_strain(materials.rotate(C, materials.ply_axes(angle, 2)))
+        return materials.rotate(C, materials.ply_axes(angle, dim))
+
+    def D(self, angle: float) -> np.ndarray:
+        """(3, 3) plane-strain stiffness Pa of a ply at ``angle`` in the slice."""
+        return materials.plane_strain(self.stiffness(angle, 2))
 
     def C(self, angle: float) -> np.ndarray:
         """(6, 6) Pa of a ply in the beam's axes (x span, y width, z thickness): fibres along x
         (0) or y (90)."""
+        return self.stiffness(angle, 3)
+
+    def strengths(self) -> HoffmanStrengths:
+        """The ply's nine Hoffman strengths, transversely isotropic (Zt = Yt, Zc = Yc, S13 = S12)."""
         m = self.ply
-        C = materials.orthotropic(m["E11"], m["E22"], m["E22"], m["nu12"], m["nu12"], m["nu23"], m["G12"], m["G12"],
-                                  m["G23"])
-        return materials.rotate(C, materials.ply_axes(angle, 3))
+        return HoffmanStrengths(Xt=m["Xt"], Xc=m["Xc"], Yt=m["Yt"], Yc=m["Yc"], Zt=m["Yt"], Zc=m["Yc"], S23=m["S23"],
+                                S13=m["S12"], S12=m["S12"])
 
     def material(self, moduli=None) -> ply_lattice.PlyMaterial:
-        """The lattice's ply: moduli, density, Hoffman strengths (Zt = Yt, Zc = Yc, S13 = S12),
-        fracture energies; ``moduli``: the 2D slice's in-plane moduli per angle."""
+        """The lattice's ply: moduli, density, Hoffman strengths, fracture energies; ``moduli``:
+        the 2D slice's in-plane moduli per angle."""
         m = self.ply
-        k = HoffmanStrengths(Xt=m["Xt"], Xc=m["Xc"], Yt=m["Yt"], Yc=m["Yc"], Zt=m["Yt"], Zc=m["Yc"], S23=m["S23"],
-                             S13=m["S12"], S12=m["S12"])
-        return ply_lattice.PlyMaterial(m["E11"], m["E22"], m["G12"], m["G23"], m["rho"], k, m["Gf_fibre"],
-                                       m["Gf_matrix"], moduli=moduli)
+        return ply_lattice.PlyMaterial(m["E11"], m["E22"], m["G12"], m["G23"], m["rho"], self.strengths(),
+                                       m["Gf_fibre"], m["Gf_matrix"], moduli=moduli)
 
     def bending_stiffness(self) -> float:
         """D (N m) per unit width, plane strain: sum E_x,b z^2 dz about the mid-plane."""
@@ -126,8 +132,8 @@ class Built:
     impactors: dict = field(default_factory=dict)  # name -> ParticleImpactor (particles) or RigidImpactor (FEM)
 
 
-def beam_of(p: dict, mode: str) -> Built:
-    """The beam's laminate and particle size, before its participants exist."""
+def body_of(p: dict, mode: str) -> Built:
+    """The body's laminate and particle size, before its participants exist."""
     lam = laminate(p, p["geometry.laminate"])
     k = p["zone.plies_per_particle"]
     if any(n % k for n in lam.plies):
@@ -150,13 +156,13 @@ def _columns_across(p: dict, d: float) -> int:
 def particle_zone(p: dict, x_end: float, tied: bool, clamped: bool):
     """(lattice, engine scene, intralaminar LawBonds, interlaminar LawBonds) of a study's beam on
     [0, x_end] (benchmarks and kernel tests take the law families from here)."""
-    built = beam_of(p, "dem")
+    built = body_of(p, "dem")
     return (_particle_block if built.dim == 3 else _particle_zone)(built, x_end, tied, clamped)
 
 
 def beam(study, p: dict, mode: str, dem: str):
     """(Simulation, Built) of a laminated beam (slice or quarter) under its impactors and supports."""
-    built = beam_of(p, mode)
+    built = body_of(p, mode)
     t, L, dim = built.t, built.half_span, built.dim
     if dim == 3:
         _columns_across(p, t)
@@ -370,7 +376,7 @@ def plate(study, p: dict, mode: str, dem: str):
     """(Simulation, Built) of a quarter of a rectangular laminated plate (symmetry planes x = 0
     and y = 0, the thickness along z) under impactors on its centre, supported at its edges;
     the zone a square column |x|, |y| <= zone.half_width through the thickness."""
-    built = beam_of(p, mode)
+    built = body_of(p, mode)
     d, t_end = built.t, study.t_end
     a2, b2, w = 0.5 * p["geometry.span"], 0.5 * p["geometry.width"], p["zone.half_width"]
     for key, length in (("geometry.span", 2 * a2), ("geometry.width", 2 * b2), ("zone.half_width", 2 * w)):

@@ -37,15 +37,11 @@ class FemIndices:
         X = region.X[region.mesh.t.T]  # (nel, nodes, dim)
         run = np.searchsorted(np.cumsum(lam.plies) * lam.ply_thickness, X[:, :, dim - 1].mean(axis=1))
         angles = np.array(lam.angles)[np.minimum(run, len(lam.angles) - 1)]
-        m = lam.ply
-        C = materials.orthotropic(m["E11"], m["E22"], m["E22"], m["nu12"], m["nu12"], m["nu23"], m["G12"], m["G12"],
-                                  m["G23"])
         axes = {a: materials.ply_axes(a, dim) for a in set(angles)}
-        self.C = np.array([materials.rotate(C, axes[a]) for a in angles])  # (nel, 6, 6)
+        stiffness = {a: lam.stiffness(a, dim) for a in set(angles)}
+        self.C = np.array([stiffness[a] for a in angles])  # (nel, 6, 6)
         self.R = np.array([axes[a] for a in angles])  # (nel, 3, 3)
-        from physics.failure import HoffmanStrengths
-        self.k = HoffmanStrengths(Xt=m["Xt"], Xc=m["Xc"], Yt=m["Yt"], Yc=m["Yc"], Zt=m["Yt"], Zc=m["Yc"],
-                                  S23=m["S23"], S13=m["S12"], S12=m["S12"])
+        self.k = lam.strengths()
         self.Z0, self.R0 = lam.interface["Z0"], lam.interface["R0"]
 
     def __call__(self, strain: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -52,13 +52,10 @@ def _contact_series(built, name, f):
     """Force of the impactor on the structure (whole structure), upwards on it (N); its
     vertical velocity (m/s)."""
     imp, w, up = built.impactors[f["impactor"]], built.width_factor, built.dim - 1
+    name_v = f"{f['impactor']}_velocity"
     if hasattr(imp, "imp"):  # on particles: the force the particles exert on it
-        if built.dim == 3:
-            return {name: lambda: float(w * imp.force[up]), f"{f['impactor']}_velocity": lambda: float(imp.imp.v[up])}
-        return {name: lambda: float(imp.force[up] * w), f"{f['impactor']}_velocity": lambda: float(imp.imp.v[up])}
-    if built.dim == 3:
-        return {name: lambda: float(w * imp.a[up] * imp.mass), f"{f['impactor']}_velocity": lambda: float(imp.v[up])}
-    return {name: lambda: float(imp.a[up] * imp.mass * w), f"{f['impactor']}_velocity": lambda: float(imp.v[up])}
+        return {name: lambda: float(imp.force[up] * w), name_v: lambda: float(imp.imp.v[up])}
+    return {name: lambda: float(imp.a[up] * imp.mass * w), name_v: lambda: float(imp.v[up])}
 
 
 def _delamination_series(built, name, f):
