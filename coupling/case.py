@@ -127,6 +127,7 @@ def _load_study(path: Path, data: dict, overrides: dict[str, Any] | None) -> Cas
             raise CaseError(f"{fixed[0]}: says what the table is; allowed: change it in the case file "
                             f"({path.name}), not with --set")
         params.update({k: schema[k].coerce(k, v) for k, v in overrides.items()})
+    study.resolve_files(params, path.absolute().parent)
     return Case(name, study, params, path.absolute(), study.DESCRIPTION, frozenset(overrides or ()))
 
 

@@ -7,6 +7,7 @@ under ``"parameters"`` in summary.json. Every value is SI.
 from __future__ import annotations
 
 import math
+import tomllib
 from dataclasses import dataclass
 from typing import Any, Callable
 
@@ -19,7 +20,8 @@ class CaseError(ValueError):
 class Param:
     """One case parameter.
 
-    kind: "float" | "int" | "str" | "bool"; low/high: inclusive bounds unless
+    kind: "float" | "int" | "str" | "bool" | "table" (rows of [time, value], time strictly
+    increasing: a load history, as LS-DYNA's *DEFINE_CURVE); low/high: inclusive bounds unless
     ``open_low``/``open_high``; choices: the allowed strings; unit: SI unit for messages.
     """
 
@@ -45,12 +47,16 @@ class Param:
             parts.append(f"{'>' if self.open_low else '>='} {self.low:g}")
         if self.high is not None:
             parts.append(f"{'<' if self.open_high else '<='} {self.high:g}")
+        if self.kind == "table":
+            return "a list of at least two [time, value] rows, times increasing"
         what = {"float": "a number", "int": "an integer", "str": "a string"}[self.kind]
         return what + (" " + " and ".join(parts) if parts else "") + (f" [{self.unit}]" if self.unit else "")
 
     def coerce(self, key: str, value: Any) -> Any:
         """Return the value in this parameter's type, or raise CaseError."""
         bad = CaseError(f"{key} = {value!r}: expected {self.allowed()}")
+        if self.kind == "table":
+            return _table(value, bad)
         if isinstance(value, str) and self.kind != "str":
             value = _parse_scalar(value)
         if self.kind == "bool":
@@ -87,6 +93,21 @@ class Param:
             raise CaseError(f"{key} = {value!r}: implausible in SI units [{self.unit}]; allowed "
                             f"{self.plausible[0]:g} to {self.plausible[1]:g} (case files are SI: Pa, kg/m^3, m, s)")
         return value
+
+
+def _table(value: Any, bad: Exception) -> tuple[tuple[float, float], ...]:
+    """Rows [time, value] (a TOML array of arrays, or its text from --set), times increasing."""
+    if isinstance(value, str):
+        try:
+            value = tomllib.loads(f"v = {value}")["v"]
+        except tomllib.TOMLDecodeError:
+            raise bad from None
+    num = lambda v: not isinstance(v, bool) and isinstance(v, (int, float)) and math.isfinite(v)
+    if (not isinstance(value, (list, tuple)) or len(value) < 2
+            or any(not isinstance(r, (list, tuple)) or len(r) != 2 or not all(map(num, r)) for r in value)
+            or any(b[0] <= a[0] for a, b in zip(value, value[1:]))):
+        raise bad
+    return tuple((float(t), float(f)) for t, f in value)
 
 
 def _parse_scalar(text: str) -> Any:

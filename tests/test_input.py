@@ -93,13 +93,20 @@ def test_unit_slips_are_caught(femdem, setting, words):
 
 
 @pytest.mark.parametrize("case, args, words", [
-    ("cfrp_beam_impact_coarse", ["--set=load.file=/nonexistent/drop.csv"], ["load.file", "/nonexistent/drop.csv"]),
+    ("cfrp_beam_impact_coarse", ["--set=loads.drop.file=/nonexistent/drop.csv"], ["loads.drop.file", "/nonexistent/drop.csv"]),
     ("cfrp_beam_impact_coarse", ["--set=zone.particle_size=5e-3"], ["zone.particle_size", "whole number"]),
     ("dcb_coarse", ["--set=particle.radius=2e-4"], ["particle.radius", "renamed", "zone.particle_size", "twice"]),
     ("chung_ooi_1", ["--set=particle.radius=0.02"], ["particle.radius", "renamed", "sphere.radius"]),
     ("rod_impact_coarse", ["--set=dem.half_width=0.02"], ["dem.half_width", "renamed", "zone.half_width"]),
     ("cfrp_beam_impact_coarse", ["--set=geometry.span=0.9"], ["geometry.span", "0.9", "allowed"]),
     ("cfrp_beam_impact_coarse", ["--set=zone.half_width=0.5"], ["zone.half_width", "allowed"]),
+    ("cfrp_beam_impact_coarse", ["--set=loads.drop.curve=[[0, 0]]"], ["loads.drop.curve", "at least two"]),
+    ("cfrp_beam_impact_coarse", ["--set=loads.drop.curve=[[0, 0], [0, 1]]"], ["loads.drop.curve", "increasing"]),
+    ("cfrp_beam_impact_coarse", ["--set=loads.drop.curve=oops"], ["loads.drop.curve", "[time, value]"]),
+    ("cfrp_beam_impact_coarse", ["--set=supports.pins.condition=clamped"], ["supports", "simply_supported"]),
+    ("cfrp_beam_impact_coarse", ["--set=loads.drop.width=0.8"], ["loads.drop.width", "narrower than the span"]),
+    ("cfrp_beam_impact_coarse", ["--set=cfrp.T0=1e9"], ["cfrp.T0", "renamed", "materials.cfrp.Xt"]),
+    ("cfrp_beam_impact_coarse", ["--set=load.patch_width=0.05"], ["load.patch_width", "renamed", "loads.drop.width"]),
     ("rod_impact_coarse", ["--set=interface.penalty=2e10"], ["interface.penalty", "toughness"]),
     ("rod_impact_coarse", ["--set=fem.integration=selective"], ["fem.integration", "allowed"]),
     ("rod_impact_coarse", ["--mode", "dem"], ["--mode dem", "fem, coupled"]),

@@ -12,7 +12,8 @@ import numpy as np
 from ..params import CaseError
 from . import closed_forms, fields, probes
 from .assemble import beam, plate
-from .schema import MODES, document, parameters
+from .bonded import bonded_beam, resolve_files
+from .schema import BONDED, LAMINATED, MODES, document, parameters
 
 __all__ = ["Study", "document_schema", "renamed"]
 
@@ -37,27 +38,88 @@ class Study:
         if isinstance(ref, bool) or not isinstance(ref, int) or ref < 0:
             raise CaseError(f"case.reference_elements = {ref!r}: allowed an integer >= 0 (0: none)")
         self.reference_elements = ref
+        self.no_fracture_reference = meta.get("no_fracture_reference", False)
+        if not isinstance(self.no_fracture_reference, bool):
+            raise CaseError(f"case.no_fracture_reference = {self.no_fracture_reference!r}: allowed true or false")
+        self._no_fracture = {}
         shape = self.PARAMETERS["geometry.shape"].default
-        want = {"beam": ("x", "quad4"), "beam_3d": ("xy", "hex8"), "plate": ("xy", "hex8")}[shape]
+        self._shape_tables(shape, data)
+        want = {"beam": ("x", "quad4"), "beam_3d": ("xy", "hex8"), "plate": ("xy", "hex8"),
+                "bonded_beam": ("x", "quad4"), "bonded_beam_3d": ("xy", "hex8")}[shape]
         at = {"plate": "edges"}.get(shape, "ends")
         for name_, kind in self.layout.names["supports"].items():
             if kind != at:
                 raise CaseError(f"supports.{name_}.at = {kind!r}: geometry.shape = {shape!r} is supported at its {at}")
-        shapes = {"plate": ("sphere",)}.get(shape, ("cylinder",))
+        shapes = {"plate": ("sphere",), "bonded_beam": (), "bonded_beam_3d": ()}.get(shape, ("cylinder",))
         for name_, kind in self.layout.names["impactors"].items():
             if kind not in shapes:
-                raise CaseError(f"impactors.{name_}.shape = {kind!r}: geometry.shape = {shape!r} takes {shapes[0]!r}")
+                raise CaseError(f"impactors.{name_}.shape = {kind!r}: geometry.shape = {shape!r} takes "
+                                f"{repr(shapes[0]) if shapes else 'no impactor (a [loads.*] instead)'}")
         for key, value in zip(("geometry.symmetry", "mesh.element"), want):
             if self.PARAMETERS[key].default != value:
                 raise CaseError(f"{key} = {self.PARAMETERS[key].default!r}: geometry.shape = {shape!r} takes {value!r}")
-        if shape == "beam" and "elements_width" in data.get("mesh", {}):
-            raise CaseError("mesh.elements_width: has no effect on a beam slice; allowed: leave it out, or "
-                            "geometry.shape = 'beam_3d'")
+        if shape in ("beam", "bonded_beam") and "elements_width" in data.get("mesh", {}):
+            raise CaseError(f"mesh.elements_width: has no effect on a slice; allowed: leave it out, or "
+                            f"geometry.shape = '{shape}_3d'")
         for name_, kind in self.layout.names["checks"].items():
             qoi = self.PARAMETERS[f"checks.{name_}.qoi"].default
             if not any(p in qoi for p in self.layout.names["probes"]):
                 raise CaseError(f"checks.{name_}.qoi = {qoi!r}: no probe of this study reports it; allowed a qoi of "
                                 f"the probes {', '.join(self.layout.names['probes']) or '(none declared)'}")
+
+    def _shape_tables(self, shape: str, data: dict) -> None:
+        """The tables and keys a shape takes: a laminated body needs a laminate, a bonded beam its
+        material, depth, one sheet and one load; keys of the other kind are refused."""
+        P, names = self.PARAMETERS, self.layout.names
+        given = lambda table, key: key in data.get(table, {})
+        if shape in LAMINATED:
+            need = [("geometry", "laminate")]
+            refuse = [("geometry", k) for k in ("material", "depth", "length")] + [("zone", "particle_size")] + \
+                [("mesh", k) for k in ("growth", "max_size")]
+            refuse_tables = ("sheets", "loads")
+        else:
+            need = [("geometry", "material"), ("geometry", "depth"), ("zone", "particle_size")]
+            refuse = [("geometry", "laminate"), ("zone", "plies_per_particle"), ("mesh", "elements_along"),
+                      ("mesh", "element_ratio")]
+            refuse_tables = ("laminates", "impactors")
+        for table, key in need:
+            if not given(table, key):
+                raise CaseError(f"{table}.{key}: required for geometry.shape = {shape!r} ({P[f'{table}.{key}'].doc})")
+        for table, key in refuse:
+            if given(table, key):
+                raise CaseError(f"{table}.{key}: has no effect on geometry.shape = {shape!r}; allowed: leave it out")
+        for table in refuse_tables:
+            if names.get(table):
+                raise CaseError(f"[{table}.{next(iter(names[table]))}]: geometry.shape = {shape!r} takes none")
+        if shape in BONDED:
+            for table in ("sheets", "loads"):
+                if len(names[table]) != 1:
+                    raise CaseError(f"[{table}.NAME]: geometry.shape = {shape!r} takes exactly one; given "
+                                    f"{len(names[table])}")
+            kinds = {n: k for n, k in names["materials"].items()}
+            body, sheet = P["geometry.material"].default, P[f"sheets.{next(iter(names['sheets']))}.material"].default
+            if kinds.get(body) != "isotropic":
+                raise CaseError(f"geometry.material = {body!r}: a bonded beam's body is an isotropic material")
+            if kinds.get(sheet) != "ply":
+                raise CaseError(f"sheets.{next(iter(names['sheets']))}.material = {sheet!r}: a sheet is a ply material")
+        else:
+            for name_, kind in names["materials"].items():
+                if kind != "ply":
+                    raise CaseError(f"materials.{name_}.kind = {kind!r}: geometry.shape = {shape!r} takes ply materials")
+
+    def resolve_files(self, p: dict, folder) -> None:
+        """Files a study reads (load curves), relative to its case file's folder."""
+        resolve_files(p, self.layout.names["loads"], folder)
+
+    def no_fracture_history(self, p: dict) -> dict:
+        """The history of this study's all-FEM twin (no fracture), run once per parameter set:
+        the reference of the cracking checks and of no_fracture_reference."""
+        from ..simulation import run_clock
+        key = tuple(sorted((k, v) for k, v in p.items() if not k.startswith(("output.", "dem.", "coupling."))))
+        if key not in self._no_fracture:
+            q = dict(p, **{"clock.dt": 0.0, "output.field_frames": 0})
+            self._no_fracture[key] = run_clock(self.build(q, "fem", ""))["history"]
+        return self._no_fracture[key]
 
     def structural(self, key: str) -> bool:
         """A key that says what a table is (its kind or shape): fixed by the file, not by --set."""
@@ -67,7 +129,8 @@ class Study:
             or key in ("geometry.shape", "zone.shape", "geometry.symmetry")
 
     def build(self, p: dict, mode: str, dem: str):
-        sim, built = (plate if p["geometry.shape"] == "plate" else beam)(self, p, mode, dem)
+        assemble = {"plate": plate, "bonded_beam": bonded_beam, "bonded_beam_3d": bonded_beam}
+        sim, built = assemble.get(p["geometry.shape"], beam)(self, p, mode, dem)
         sim.probes.update(probes.series(self, built, p))
         size = float(built.fem_elements + (built.lattice.n if built.lattice is not None else 0))
         sim.probes["model_size"] = lambda: size  # elements + particles
@@ -79,6 +142,14 @@ class Study:
     def evaluate(self, p: dict, history: dict, mode: str):
         qoi = probes.qoi(self, p, history)
         qoi["model_size"] = float(history["model_size"][-1])
+        if self.no_fracture_reference and mode != "fem":
+            ref = self.no_fracture_history(p)
+            history["no_fracture.time"] = ref["time"]  # saved with the history, drawn by the plots
+            for name, kind in self.layout.names["probes"].items():
+                if kind == "point_displacement" and name in ref:
+                    history[f"no_fracture.{name}"] = ref[name]
+                    qoi[f"peak_{name}_no_fracture"] = float(np.max(ref[name]))
+                    qoi[f"{name}_change_by_fracture"] = qoi[f"peak_{name}"] / qoi[f"peak_{name}_no_fracture"] - 1
         if self.reference_elements:
             qoi["model_size_vs_reference"] = qoi["model_size"] / self.reference_elements
         return qoi, closed_forms.evaluate(self, p, qoi, history)
@@ -92,11 +163,11 @@ class Study:
 def _damage_snapshots(sim, built) -> None:
     """Damage pictures at the first sixth of the run and at its end."""
     lat, intra, inter, backend = built.lattice, built.intra, built.inter, built.backend
-    in_90 = (np.array(built.lam.angles)[lat.ply] == 90).astype(float)
+    in_90 = (np.array(built.lam.angles)[lat.ply] == 90).astype(float) if built.lam is not None else np.zeros(lat.n)
     t_end = sim.n_steps * sim.dt
     far = _far_field(built)
     if built.dim == 3:
-        j = lat.index[:, 1].astype(float)
+        j = (lat.index[:, 1] if built.lam is not None else built.width_index).astype(float)
         for t_snap in (t_end / 6, t_end):
             sim.snapshots[f"damage_{round(t_snap * 1e6)}us"] = (t_snap, lambda: {
                 **far(), "x": backend.positions(), "width_index": j, "in_90": in_90,
@@ -143,6 +214,30 @@ def renamed(key: str, study: Study) -> str | None:
         return f"interfaces.{one('interfaces')}.{tail}"
     if key.startswith("impactor.") and one("impactors"):
         return f"impactors.{one('impactors')}.{tail}"
+    if key.startswith(("concrete.", "cfrp.", "bond.", "load.", "crack.")) and names["sheets"]:
+        return _renamed_bonded(key, study)
     return {"dem.half_width": "zone.half_width", "dem.plies_per_row": "zone.plies_per_particle",
             "geometry.half_span": "geometry.span (the whole span)", "laminate.layup": f"laminates.{one('laminates')}.layup",
             "laminate.ply_thickness": f"laminates.{one('laminates')}.ply_thickness"}.get(key)
+
+
+def _renamed_bonded(key: str, study: Study) -> str | None:
+    """The study key of a key of the former cfrp_beam_impact scene."""
+    P, names = study.PARAMETERS, study.layout.names
+    sheet = next(iter(names["sheets"]))
+    table, _, field = key.partition(".")
+    if table == "concrete":
+        return f"materials.{P['geometry.material'].default}.{field}"
+    if table == "cfrp":
+        if field == "thickness":
+            return f"sheets.{sheet}.thickness"
+        ply = {"E1": "E11", "E2": "E22", "T0": "Xt (and Xc)", "sigma_t": "Yt (and Yc, S12, S23)", "Gf": "Gf_fibre"}
+        return f"materials.{P[f'sheets.{sheet}.material'].default}.{ply.get(field, field)}"
+    if table == "bond":
+        return f"interfaces.{P[f'sheets.{sheet}.interface'].default}.{field}"
+    if table == "load" and names["loads"]:
+        return f"loads.{next(iter(names['loads']))}.{'width' if field == 'patch_width' else field}"
+    if key == "crack.visible_opening":
+        kinds = [n for n, k in names["probes"].items() if k == "flexural_cracks"]
+        return f"probes.{kinds[0]}.visible_opening" if kinds else None
+    return None

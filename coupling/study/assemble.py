@@ -116,7 +116,7 @@ class Built:
 
     p: dict
     mode: str
-    lam: Laminate
+    lam: Laminate | None  # None: a bonded beam
     half_span: float
     t: float  # particle size, m (and the 2D slice's thickness out of plane)
     width_factor: float
@@ -130,6 +130,16 @@ class Built:
     fem_elements: int = 0
     end_held: bool = False  # the zone's last column is tied to the FEM or clamped
     impactors: dict = field(default_factory=dict)  # name -> ParticleImpactor (particles) or RigidImpactor (FEM)
+    # a bonded beam's (study/bonded.py): its data, the sheet's bonds, each particle's width index
+    # (3D), the beam's length per adhesive bond (m, whole beam), the loads' probes, the body's
+    # stiffness row of sigma_xx (all-FEM), and whether the zone's edge damage counts body bonds
+    bonded: object = None
+    sheet: LawBonds | None = None
+    width_index: np.ndarray | None = None
+    bond_whole: np.ndarray | None = None
+    load_probes: dict = field(default_factory=dict)
+    fibre_stiffness: np.ndarray | None = None
+    edge_intra: bool = False
 
 
 def body_of(p: dict, mode: str) -> Built:

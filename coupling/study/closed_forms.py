@@ -21,16 +21,17 @@ _CHECK = {"qoi": Param("", "the qoi compared (a name the run reports)", kind="st
 @dataclass(frozen=True)
 class ClosedForm:
     doc: str
-    reference_qoi: str  # the qoi the reference is recorded as
-    reference: Callable  # (study, p) -> float, SI
-    source: str
-    fields: dict = None
+    reference_qoi: str  # the qoi the reference is recorded as ("": not recorded)
+    reference: Callable  # (study, p, the check's fields) -> float or (low, high), SI
+    source: str  # "": the check's own source field
+    fields: dict = None  # the check's fields (default: qoi and tol)
+    costly: bool = False  # computed only when the checked qoi exists (it runs a model)
 
     def __post_init__(self):
-        object.__setattr__(self, "fields", dict(_CHECK))
+        object.__setattr__(self, "fields", dict(self.fields or _CHECK))
 
 
-def beam_spring_mass(study, p: dict, delaminated: bool = False) -> float:
+def beam_spring_mass(study, p: dict, f: dict | None = None, delaminated: bool = False) -> float:
     """Peak centre deflection (m) of a beam struck at mid-span by a rigid mass: v sqrt(M / k),
     quasi-static stiffness k = 192 D / L^3 clamped or 48 D / L^3 simply supported (L the span,
     D the plane-strain bending stiffness per width), M the impactor's mass plus the beam's
@@ -54,7 +55,7 @@ def beam_spring_mass(study, p: dict, delaminated: bool = False) -> float:
     return q["velocity"] * np.sqrt(M / k)
 
 
-def plate_spring_mass(study, p: dict) -> float:
+def plate_spring_mass(study, p: dict, f: dict | None = None) -> float:
     """Peak centre deflection (m) of a clamped rectangular plate (span a along x, width b along
     y) struck at its centre by a rigid mass: v sqrt(M / k), with the one-term Ritz mode
     w = W (1 + cos 2 pi x / a)(1 + cos 2 pi y / b) / 4 of a specially orthotropic plate:
@@ -81,13 +82,39 @@ def plate_spring_mass(study, p: dict) -> float:
     return q["velocity"] * np.sqrt(M / k)
 
 
-def beam_spring_mass_bracket(study, p: dict) -> tuple[float, float]:
+def beam_spring_mass_bracket(study, p: dict, f: dict | None = None) -> tuple[float, float]:
     """(intact, fully delaminated) spring-mass estimates of the peak centre deflection (m): a
     beam that delaminates lies between them."""
     return beam_spring_mass(study, p), beam_spring_mass(study, p, delaminated=True)
 
 
+def elastic_cracking_time(study, p: dict, f: dict) -> float:
+    """When the no-fracture (all-FEM) run's fibre stress (the ``probe``, a fibre_stress probe)
+    first reaches the weakest body bond's strength, (1 - strength_scatter) ft (s; nan if never)."""
+    from .probes import first_time
+    ref = study.no_fracture_history(p)
+    body = section(p, f"materials.{p['geometry.material']}")
+    weakest = (1 - body["strength_scatter"]) * body["ft"]
+    return first_time(np.asarray(ref["time"]), np.asarray(ref[f["probe"]]) - weakest)
+
+
+_SOURCE = Param("", "where the value comes from (a test, a paper)", kind="str")
+
+
 CLOSED_FORMS: dict[str, ClosedForm] = {
+    "elastic_cracking_time": ClosedForm(
+        "the time the no-fracture all-FEM twin's fibre stress reaches the weakest bond's strength (1 - scatter) ft "
+        "(bonded beams; a first crack should appear then)", "elastic_cracking_time", elastic_cracking_time,
+        "the no-fracture FEM's bottom fibre at mid-span reaches (1 - scatter) ft",
+        {**_CHECK, "probe": Param("", "the fibre_stress probe read in the all-FEM twin", kind="str")}, costly=True),
+    "test_value": ClosedForm(
+        "a value measured in a test (independent data), within tol", "", lambda study, p, f: f["value"], "",
+        {**_CHECK, "value": Param(0.0, "the measured value (SI)"), "source": _SOURCE}),
+    "test_between": ClosedForm(
+        "a measured range (independent data): the qoi between low and high", "",
+        lambda study, p, f: (f["low"], f["high"]), "",
+        {"qoi": _CHECK["qoi"], "low": Param(0.0, "lowest value (SI)"), "high": Param(0.0, "highest value (SI)"),
+         "source": _SOURCE}),
     "beam_spring_mass_bracket": ClosedForm(
         "the peak deflection between the spring-mass estimates of the intact beam and of the beam delaminated at "
         "every interface (its runs of plies bending apart), within tol below and above",
@@ -110,14 +137,20 @@ def evaluate(study, p: dict, qoi: dict, history: dict) -> dict:
     checks = {}
     for name, form_name in study.layout.names["checks"].items():
         form, f = CLOSED_FORMS[form_name], section(p, f"checks.{name}")
-        ref = form.reference(study, p)
-        if isinstance(ref, tuple):  # a bracket (low, high)
-            qoi[form.reference_qoi], qoi[form.reference_qoi + "_upper"] = ref
-            if f["qoi"] in qoi:
-                checks[name] = within(qoi[f["qoi"]], (1 - f["tol"]) * ref[0], (1 + f["tol"]) * ref[1], form.source)
+        if form.costly and f["qoi"] not in qoi:
             continue
-        qoi[form.reference_qoi] = ref
+        ref = form.reference(study, p, f)
+        source = form.source or f["source"]
+        tol = f.get("tol", 0.0)
+        if isinstance(ref, tuple):  # a bracket (low, high)
+            if form.reference_qoi:
+                qoi[form.reference_qoi], qoi[form.reference_qoi + "_upper"] = ref
+            if f["qoi"] in qoi:
+                checks[name] = within(qoi[f["qoi"]], (1 - tol) * ref[0], (1 + tol) * ref[1], source)
+            continue
+        if form.reference_qoi:
+            qoi[form.reference_qoi] = ref
         if f["qoi"] in qoi:
-            checks[name] = check(qoi[f["qoi"]], ref, f["tol"], form.source)
+            checks[name] = check(qoi[f["qoi"]], ref, tol, source)
     checks["energy_balance"] = energy_balance(history)
     return checks

@@ -54,6 +54,32 @@ class FemIndices:
         return hashin_interlaminar(ply, self.Z0, self.R0), hoffman(ply, self.k)
 
 
+class BondedIndices:
+    """Per-element indices of a bonded beam's FEM: Hoffman of the body (its stiffness on the
+    centroid strain, its isotropic strengths) and the adhesive's Hashin index on the bottom
+    element row, where the sheet is smeared (0 elsewhere)."""
+
+    def __init__(self, region, bb, dim: int):
+        self.dim = dim
+        C = bb.body_C()
+        self.D = C if dim == 3 else materials.plane_stress(C)
+        self.R = materials.ply_axes(0.0, dim)
+        X = region.X[region.mesh.t.T]
+        self.bottom = X[:, :, dim - 1].mean(axis=1) < bb.d / 2
+        self.k = bb.body_strengths()
+        self.Z0, self.R0 = bb.adhesive["Z0"], bb.adhesive["R0"]
+
+    def __call__(self, strain: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        s = strain @ self.D.T
+        if self.dim == 2:  # plane stress: (xx, yy, xy) -> (xx, yy, zz = 0, yz = 0, xz = 0, xy)
+            sig = np.zeros((len(s), 6))
+            sig[:, [0, 1, 5]] = s
+        else:
+            sig = s
+        ply = to_ply_axes(sig, self.R)
+        return np.where(self.bottom, hashin_interlaminar(ply, self.Z0, self.R0), 0.0), hoffman(ply, self.k)
+
+
 def frames(built):
     """() -> FieldFrame of the structure ``built`` (study/assemble.py) at the current state."""
     dyn, lat, backend = built.dyn, built.lattice, built.backend
@@ -62,14 +88,15 @@ def frames(built):
         region = dyn.region
         nodes = region.n_nodes
         cells[CELL[region.etype.name]] = region.mesh.t.T
-        indices = FemIndices(region, built.lam, built.dim)
+        indices = FemIndices(region, built.lam, built.dim) if built.lam is not None else \
+            BondedIndices(region, built.bonded, built.dim)
     if lat is not None:
         pairs = built.inter.pairs
         mids = nodes + lat.n + np.arange(len(pairs))
         cells["vertex"] = (nodes + np.arange(lat.n))[:, None]
         cells["line3"] = np.column_stack([nodes + pairs, mids])
         ply = np.asarray(lat.ply, float)
-        bonds = [built.intra, built.inter]
+        bonds = [built.intra, built.inter] + ([built.sheet] if getattr(built, "sheet", None) is not None else [])
     points = np.vstack(([_pad(dyn.region.X)] if dyn is not None else [])
                        + ([lat.x, 0.5 * (lat.x[pairs[:, 0]] + lat.x[pairs[:, 1]])] if lat is not None else []))
 

@@ -12,7 +12,7 @@ from typing import Callable
 
 import numpy as np
 
-from ..params import CaseError, Param
+from ..params import CaseError, Param, positive
 from .schema import section
 
 
@@ -99,13 +99,104 @@ def _ply_crack_series(built, name, f):
 
 
 def _zone_edge_series(built, name, f):
-    """The largest interlaminar damage in the last ``columns`` columns before the zone's edge:
-    near 1, the damage reached the edge and the zone must widen."""
+    """The largest interlaminar (or adhesive) damage in the last ``columns`` columns before the
+    zone's edge, and on a bonded beam also of the body's bonds with both ends there: near 1,
+    the damage reached the edge and the zone must widen."""
     if built.inter is None:
         return {}
     inter, column = built.inter, built.column
     edge = column[inter.pairs[:, 0]] >= column.max() - f["columns"]
+    if getattr(built, "edge_intra", False):
+        body = built.intra
+        edge_b = column[body.pairs].min(axis=1) >= column.max() - f["columns"]
+        return {name: lambda: float(max(inter.damage[edge].max(), body.damage[edge_b].max()))}
     return {name: lambda: float(inter.damage[edge].max()) if edge.any() else 0.0}
+
+
+def first_time(time: np.ndarray, series: np.ndarray) -> float:
+    """First sample time at which ``series`` > 0 (nan if never)."""
+    hit = np.flatnonzero(np.asarray(series) > 0)
+    return float(time[hit[0]]) if hit.size else float("nan")
+
+
+def _load_series(built, name, f):
+    """The whole load (N) a [loads.*] applies now."""
+    return {name: built.load_probes[f["load"]]}
+
+
+def _fibre_stress_series(built, name, f):
+    """sigma_xx (Pa) of the body's material on the small-strain centroid strain of the FEM
+    element nearest the point (all-FEM runs; on a bonded beam's bottom row the element holds the
+    sheet smeared: its strain is the body's, its stress is not)."""
+    if built.lattice is not None or built.dyn is None:
+        return {}
+    region, dyn = built.dyn.region, built.dyn
+    at = np.array([f["x"], f["y"], f["z"]])[:built.dim]
+    centroid = region.X[region.mesh.t.T].mean(axis=1)
+    e = int(np.argmin(np.linalg.norm(centroid - at, axis=1)))
+    row = built.fibre_stiffness
+    return {name: lambda: float(row @ region.centroid_strain_stress(dyn.state.u)[0][e])}
+
+
+def _crack_series(built, name, f):
+    """Cracks in a bonded beam's body: bonds softening; bonds open by more than visible_opening
+    (a crack one sees in a test) at the bottom face within one depth of mid-span, at the top face
+    within half a depth; the highest such crack near mid-span (m); all such; traction-free."""
+    if built.intra is None or not hasattr(built, "bonded"):
+        return {}
+    c, x, d, up = built.intra, built.lattice.x, built.t, built.dim - 1
+    H = built.bonded.depth
+    xm = 0.5 * (x[c.pairs[:, 0]] + x[c.pairs[:, 1]])
+    near = np.abs(xm[:, 0]) < H
+    bottom = near & (xm[:, up] < d)  # bonds touching the bottom row
+    top = (np.abs(xm[:, 0]) < H / 2) & (xm[:, up] > H - d)
+    w = f["visible_opening"]
+    cracked = lambda: (c.damage > 0) & (c.split(c.delta)[0] >= w)
+    return {
+        f"{name}_bottom": lambda: float(np.sum(cracked()[bottom])),
+        f"{name}_softening": lambda: float(np.sum(c.damage > 0)),
+        f"{name}_top": lambda: float(np.sum(cracked()[top])),
+        f"{name}_height": lambda: float(xm[near & cracked(), up].max() + d / 2) if np.any(near & cracked()) else 0.0,
+        f"{name}_visible": lambda: float(np.sum(cracked())),
+        f"{name}_traction_free": lambda: float(np.sum(c.failed())),
+    }
+
+
+def _crack_qoi(name, f, h):
+    time = np.asarray(h["time"])
+    return {"crack_onset_time": first_time(time, h[f"{name}_softening"]),
+            "crack_initiation_time": first_time(time, h[f"{name}_bottom"]),
+            "crack_top_time": first_time(time, h[f"{name}_top"]),
+            "cracked_bonds": float(h[f"{name}_visible"][-1]),
+            "traction_free_bonds": float(h[f"{name}_traction_free"][-1])}
+
+
+def _debond_series(built, name, f):
+    """A bonded sheet: debonded (traction-free) and damaged lengths of the adhesive along the
+    beam (whole beam, m; 3D: areas over the width), broken sheet bonds."""
+    if built.inter is None or not hasattr(built, "bonded"):
+        return {}
+    bond, sheet, whole = built.inter, built.sheet, built.bond_whole
+    return {f"{name}_length": lambda: float(whole @ bond.failed()),
+            f"{name}_damaged_length": lambda: float(whole @ (bond.damage > 0)),
+            f"{name}_sheet_broken": lambda: float(np.sum(sheet.failed()))}
+
+
+def _debond_qoi(name, f, h):
+    time, length = np.asarray(h["time"]), np.asarray(h[f"{name}_length"])
+    at = f["at"]
+    return {"debond_initiation_time": first_time(time, length), "debonded_length": float(length[-1]),
+            f"debonded_fraction_{round(at * 1e6)}us": float(np.interp(at, time, length)) / f["beam_length"],
+            "sheet_broken_bonds": float(h[f"{name}_sheet_broken"][-1])}
+
+
+def _when(*series):
+    """A qoi function that reports only when the probe made its series in this mode."""
+    def wrap(fn):
+        def qoi(name, f, h):
+            return fn(name, f, h) if all(s.format(name=name) in h for s in series) else {}
+        return qoi
+    return wrap
 
 
 def _max_qoi(name, f, h):
@@ -136,6 +227,29 @@ PROBES: dict[str, ProbeKind] = {
         "largest interlaminar damage near the zone's edge (1: the zone is too narrow); qoi: its maximum",
         {"columns": Param(2, "particle columns counted from the edge", kind="int", low=0, high=100)},
         _zone_edge_series, _max_qoi),
+    "applied_load": ProbeKind(
+        "the whole load a [loads.*] applies (N); qoi peak_NAME",
+        {"load": Param("", "the load (a [loads.*] name)", kind="str")},
+        _load_series, _when("{name}")(lambda name, f, h: {f"peak_{name}": float(np.max(h[name]))})),
+    "fibre_stress": ProbeKind(
+        "sigma_xx of the body's material at the FEM element nearest (x, y[, z]), all-FEM runs only (the "
+        "reference of elastic_cracking_time); qoi peak_NAME",
+        {"x": Param(0.0, "x of the point", unit="m"), "y": Param(0.0, "y of the point", unit="m"),
+         "z": Param(0.0, "z of the point (3D)", unit="m")},
+        _fibre_stress_series, _when("{name}")(lambda name, f, h: {f"peak_{name}": float(np.max(h[name]))})),
+    "flexural_cracks": ProbeKind(
+        "cracks in a bonded beam's body (bonded beams); qoi crack_onset_time (first bond softening), "
+        "crack_initiation_time (a bond at the bottom face within a depth of mid-span opens visible_opening), "
+        "crack_top_time (the same at the top face within half a depth), cracked_bonds, traction_free_bonds",
+        {"visible_opening": positive(0.1e-3, "crack opening counted as a crack (one seen by eye in a test is "
+                                     "~0.1 mm wide)", "m")},
+        _crack_series, _when("{name}_bottom")(_crack_qoi)),
+    "debonding": ProbeKind(
+        "the adhesive between a bonded beam and its sheet (bonded beams): NAME_length (debonded, whole beam), "
+        "NAME_damaged_length, NAME_sheet_broken; qoi debond_initiation_time, debonded_length, "
+        "debonded_fraction_<at>us (of beam_length), sheet_broken_bonds",
+        {"at": positive(750e-6, "the time of the debonded fraction (of the beam's and sheet's length)", "s")},
+        _debond_series, _when("{name}_length")(_debond_qoi)),
 }
 
 
@@ -151,6 +265,8 @@ def qoi(study, p: dict, history: dict) -> dict:
     out = {}
     for name, kind in study.layout.names["probes"].items():
         fields = section(p, f"probes.{name}")
+        if kind == "debonding":  # the fraction is of the sheet's length, the beam's
+            fields["beam_length"] = p["geometry.length"] or p["geometry.span"]
         if any(k == name or k.startswith(name + "_") for k in history):
             out.update(PROBES[kind].qoi(name, fields, history))
     return out

@@ -5,26 +5,33 @@ fields; every value has one flat dotted key (``materials.graphite_epoxy.E11``), 
 ``--set`` takes and summary.json echoes. ``femdem schema`` prints this file's tables.
 
 Sections (one concept, one key):
-- case:         description, name, t_end, modes
+- case:         description, name, t_end, modes, reference_elements, no_fracture_reference
 - materials.*:  kind "ply" (a transversely isotropic ply: moduli, density, Hoffman strengths,
-                fracture energies)
-- interfaces.*: kind "hashin" (interlaminar law: Z0, R0, GIc, GIIc, friction)
+                fracture energies) or "isotropic" (a quasi-brittle solid, concrete: E, nu, rho,
+                ft, fc, Gf, the scatter of its bond strengths)
+- interfaces.*: kind "hashin" (interlaminar or adhesive law: Z0, R0, GIc, GIIc, friction)
 - laminates.*:  layup, ply_thickness, material, interface
+- sheets.*:     a bonded beam's sheet on its bottom face: material (a ply), thickness, interface
 - geometry:     shape "beam" (a plane-strain slice of a laminated beam along x, y through the
                 thickness, centred on x = 0), "beam_3d" (a quarter of it, the thickness along
-                z) or "plate" (a quarter of a rectangular plate), its laminate, span, width,
-                symmetry
+                z), "plate" (a quarter of a rectangular plate), "bonded_beam" (a plane-stress
+                slice of a beam of one isotropic material with a sheet bonded under it) or
+                "bonded_beam_3d" (a quarter of it); its laminate or material and depth, span,
+                width, length, symmetry
 - mesh:         FEM elements and their sizing, graded towards the zone
 - fem:          the FEM's integration and formulation
 - zone:         the DEM damage zone: shape "box" (|x| <= half_width, the whole thickness),
-                plies_per_particle (the particle size in plies)
+                plies_per_particle (laminates) or particle_size (bonded beams)
 - supports.*:   at "ends" (a beam's, x = +-span / 2) or "edges" (a plate's), condition clamped
                 or simply_supported
 - impactors.*:  shape "cylinder" (a beam's, along its width, on the top face at x = 0: radius,
                 mass_per_width, velocity, penalty, friction) or "sphere" (a plate's, on its centre:
                 radius, mass, velocity, penalty, friction)
+- loads.*:      kind "patch" (a bonded beam's: a force history on its top face about x = 0, as
+                a curve of [time, force] rows or a CSV file, with scale factors)
 - probes.*:     kind from the registry (study/probes.py), with what the run reports of them
-- checks.*:     a qoi against a closed form registered in code (study/closed_forms.py), tol
+- checks.*:     a qoi against a closed form registered in code (study/closed_forms.py) or against
+                a test's value or range given with its source
 - coupling:     the FEM-DEM tie
 - ranges:       "key" = [low, high], the verified range of a numeric key (outside: refused)
 """
@@ -39,6 +46,8 @@ from ..params import CaseError, Param, density, modulus, positive
 from ..participants.coupled import COUPLING
 
 REQUIRED = None  # a field's default when the file must give it
+SHAPES = ("beam", "beam_3d", "plate", "bonded_beam", "bonded_beam_3d")
+LAMINATED, BONDED = ("beam", "beam_3d", "plate"), ("bonded_beam", "bonded_beam_3d")
 
 
 def _ratio(default, doc, low=0.0, high=0.49):
@@ -72,6 +81,18 @@ KINDS: dict[str, dict[str, dict[str, Param]]] = {
             "Gf_fibre": _toughness("fracture energy of a crack across the fibres"),
             "Gf_matrix": _toughness("fracture energy of a matrix crack (along the fibres)"),
         },
+        "isotropic": {  # a quasi-brittle solid (concrete): cracks by Hoffman with its two strengths
+            "E": modulus(REQUIRED, "Young's modulus"),
+            "nu": _ratio(REQUIRED, "Poisson ratio"),
+            "rho": density(REQUIRED, "density"),
+            "ft": _strength("tensile strength"),
+            "fc": _strength("compressive strength"),
+            "Gf": _toughness("fracture energy (area of the linear softening per crack area)"),
+            "strength_scatter": Param(0.0, "bond strengths uniform in 1 +- this (heterogeneity, so that cracks "
+                                      "localise as in a real concrete instead of softening uniformly)",
+                                      low=0.0, high=0.5),
+            "seed": Param(1, "random seed of the strength scatter (the same on every engine)", kind="int", low=0),
+        },
     },
     "interfaces": {
         "hashin": {
@@ -100,6 +121,25 @@ KINDS: dict[str, dict[str, dict[str, Param]]] = {
             "friction": Param(0.2, "impactor friction", low=0.0, high=2.0),
         },
     },
+    "sheets": {
+        "bottom": {  # a bonded beam's, on its bottom face over its whole length
+            "material": Param(REQUIRED, "the sheet's material (a [materials.*] ply, fibres along the beam)", kind="str"),
+            "thickness": positive(REQUIRED, "sheet thickness", "m"),
+            "interface": Param(REQUIRED, "the adhesive between sheet and beam (an [interfaces.*] name)", kind="str"),
+        },
+    },
+    "loads": {
+        "patch": {  # on the top face, centred on x = 0, across the whole width, downwards
+            "width": positive(REQUIRED, "length of the loaded patch along the beam (both halves)", "m"),
+            "curve": Param(((0.0, 0.0), (1.0, 0.0)), "the whole load's history: rows [time, force] (zero outside); "
+                           "times x time_scale in s, forces x value_scale in N", kind="table"),
+            "file": Param("", "a CSV time,force read instead of curve (relative to the case file; header and # "
+                          "lines skipped), scaled by time_scale and value_scale", kind="str"),
+            "time_scale": positive(1.0, "factor on the curve's times to s (1e-3: given in ms; *DEFINE_CURVE SFA)", ""),
+            "value_scale": positive(1.0, "factor on the curve's forces to N (1e3: given in kN; SFO)", ""),
+            "scale": positive(1.0, "factor on the load (a study's knob)", ""),
+        },
+    },
     "supports": {
         "ends": {  # a beam's, at x = +-span / 2
             "condition": Param("clamped", "clamped (the end face held) or simply_supported (its bottom edge held "
@@ -113,7 +153,8 @@ KINDS: dict[str, dict[str, dict[str, Param]]] = {
 }
 # the key naming a named table's kind, and its default (a single-kind table may leave it out)
 KIND_KEY = {"materials": ("kind", "ply"), "interfaces": ("kind", "hashin"), "impactors": ("shape", "cylinder"),
-            "supports": ("at", "ends"), "probes": ("kind", None), "checks": ("closed_form", None)}
+            "supports": ("at", "ends"), "probes": ("kind", None), "checks": ("closed_form", None),
+            "sheets": ("face", "bottom"), "loads": ("kind", "patch")}
 
 LAMINATE = {
     "layup": Param(REQUIRED, "layup, bottom up: [ANGLE_COUNT/...] with an optional repeat and s (symmetric), "
@@ -127,9 +168,15 @@ SECTIONS: dict[str, dict[str, Param]] = {
     "geometry": {
         "shape": Param("beam", "beam: a plane-strain slice of a laminated beam along x, centred on x = 0; "
                        "beam_3d: a quarter of it (x = 0 and mid-width y = 0 symmetry planes), thickness along z; "
-                       "plate: a quarter of a rectangular plate, span along x and width along y, centred on x = y = 0",
-                       kind="str", choices=("beam", "beam_3d", "plate")),
-        "laminate": Param(REQUIRED, "the beam's laminate (a [laminates.*] name)", kind="str"),
+                       "plate: a quarter of a rectangular plate, span along x and width along y, centred on x = y = 0; "
+                       "bonded_beam: a plane-stress slice of a beam of one isotropic material with a sheet bonded "
+                       "to its bottom face; bonded_beam_3d: a quarter of it",
+                       kind="str", choices=SHAPES),
+        "laminate": Param("", "the laminate (a [laminates.*] name; beam, beam_3d, plate)", kind="str"),
+        "material": Param("", "the body's material (an isotropic [materials.*] name; bonded beams)", kind="str"),
+        "depth": Param(0.0, "the body's depth (bonded beams; a laminate's is its plies')", unit="m", low=0.0),
+        "length": Param(0.0, "the beam's length, supports inside it at +-span / 2 (bonded beams); 0: the span",
+                        unit="m", low=0.0),
         "span": positive(REQUIRED, "distance between the supports", "m"),
         "width": positive(REQUIRED, "width out of the slice's plane (forces are reported for the whole width)", "m"),
         "symmetry": Param("x", "the symmetry planes: x (beam: half model about x = 0) or xy (beam_3d: also "
@@ -140,8 +187,12 @@ SECTIONS: dict[str, dict[str, Param]] = {
                          choices=("quad4", "hex8")),
         "elements_along": Param(30, "FEM elements between the zone and a support", kind="int", low=2),
         "element_ratio": Param(6.0, "largest / smallest element length, graded from the zone", low=1.0, high=100.0),
-        "elements_width": Param(4, "Hex8 elements across the modelled half width (beam_3d), or across the "
-                                "zone's half width (plate)", kind="int", low=1, high=200),
+        "elements_width": Param(4, "Hex8 elements across the modelled half width (beam_3d, bonded_beam_3d), or "
+                                "across the zone's half width (plate)", kind="int", low=1, high=200),
+        "growth": Param(1.2, "bonded beams: element length ratio between neighbours, from the particle size at the "
+                        "zone's edge towards the support", low=1.0, high=2.0),
+        "max_size": Param(25e-3, "bonded beams: the largest element length along the beam", unit="m", low=0.0,
+                          open_low=True),
     },
     "fem": {
         "integration": Param("selective", "full, or selective (shear at the centroid: no shear locking)",
@@ -152,13 +203,15 @@ SECTIONS: dict[str, dict[str, Param]] = {
         "shape": Param("box", "box: |x| <= half_width (a plate: and |y| <= half_width) through the whole "
                        "thickness", kind="str", choices=("box",)),
         "half_width": positive(REQUIRED, "half width of the DEM zone about x = 0 (coupled mode)", "m"),
-        "plies_per_particle": Param(1, "plies per particle row (the particle size is this x ply thickness)",
-                                    kind="int", low=1, high=8),
+        "plies_per_particle": Param(1, "plies per particle row (the particle size is this x ply thickness; "
+                                    "laminates)", kind="int", low=1, high=8),
+        "particle_size": Param(0.0, "lattice spacing d (bonded beams: the depth holds a whole number of rows)",
+                               unit="m", low=0.0),
     },
     "coupling": {k.split(".", 1)[1]: v for k, v in COUPLING.items()},
 }
-COLLECTIONS = ("materials", "interfaces", "laminates", "impactors", "supports", "probes", "checks")
-META = {"description", "name", "t_end", "modes", "reference_elements"}
+COLLECTIONS = ("materials", "interfaces", "laminates", "sheets", "impactors", "loads", "supports", "probes", "checks")
+META = {"description", "name", "t_end", "modes", "reference_elements", "no_fracture_reference"}
 MODES = ("coupled", "fem", "dem")
 
 
@@ -268,12 +321,15 @@ def _fields(prefix: str, fields: dict[str, Param], given: dict, where: str) -> d
 
 def _references(schema: dict[str, Param], layout: Layout, where: str) -> None:
     """Names that point at other tables must exist: a reference becomes a choice among them."""
-    refs = {"material": "materials", "interface": "interfaces", "laminate": "laminates", "impactor": "impactors"}
+    refs = {"material": "materials", "interface": "interfaces", "laminate": "laminates", "impactor": "impactors",
+            "load": "loads"}
     for key, param in list(schema.items()):
         field = key.rsplit(".", 1)[-1]
-        if field in refs and param.kind == "str" and key.startswith(("laminates.", "geometry.", "probes.")):
+        if field in refs and param.kind == "str" and key.startswith(("laminates.", "geometry.", "probes.", "sheets.")):
             target = refs[field]
             allowed = tuple(layout.names[target])
+            if key.startswith("geometry.") and param.default == "":  # not this shape's (Study checks)
+                continue
             if param.default not in allowed:
                 raise CaseError(f"{key} = {param.default!r}: no [{target}.{param.default}] in {where}; allowed: "
                                 f"{', '.join(allowed) or f'(declare a [{target}.NAME] table)'}")
@@ -297,8 +353,10 @@ def document(probe_kinds: dict, closed_forms: dict) -> str:
             lines.append(f"  {field} = {value}  # {prm.allowed()}; {prm.doc}")
         lines.append("")
     lines.append("[case]\n  description, name (the run directory's), t_end (s, required), modes (default "
-                 "all of coupled, fem, dem), reference_elements (model_size_vs_reference)\n")
-    for collection in ("materials", "interfaces", "impactors", "supports"):
+                 "all of coupled, fem, dem), reference_elements (model_size_vs_reference), no_fracture_reference "
+                 "(true: a coupled or all-DEM run also runs its all-FEM twin and reports each point displacement's "
+                 "peak without fracture, peak_NAME_no_fracture and NAME_change_by_fracture)\n")
+    for collection in ("materials", "interfaces", "sheets", "impactors", "loads", "supports"):
         key = KIND_KEY[collection][0]
         for kind, fields in KINDS[collection].items():
             table(f"[{collection}.NAME]  {key} = {kind!r}", fields)
