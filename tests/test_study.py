@@ -39,7 +39,8 @@ def study_text(**replace) -> str:
     ({"qoi = ": 'qoi = "peak_stress"'}, "", ["checks.peak_deflection.qoi", "peak_stress", "no probe"]),
     ({"t_end = ": ""}, "", ["case.t_end", "required"]),
     ({"condition = ": 'condition = "pinned"'}, "", ["supports.rollers.condition", "'clamped'", "'simply_supported'"]),
-    ({}, "[loads]\nforce = 1.0\n", ["[loads]", "unknown table"]),
+    ({}, "[springs]\nforce = 1.0\n", ["[springs]", "unknown table"]),
+    ({}, "[loads.drop]\nwidth = 0.01\n", ["[loads.drop]", "takes none"]),
     ({}, '[ranges]\n"geometry.span" = [50e-3, 80e-3]\n', ["geometry.span", "0.04", ">= 0.05"]),
     ({}, '[ranges]\n"geometry.spam" = [50e-3, 80e-3]\n', ["ranges.geometry.spam", "not a numeric key"]),
 ])

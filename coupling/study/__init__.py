@@ -166,6 +166,9 @@ def _damage_snapshots(sim, built) -> None:
     in_90 = (np.array(built.lam.angles)[lat.ply] == 90).astype(float) if built.lam is not None else np.zeros(lat.n)
     t_end = sim.n_steps * sim.dt
     far = _far_field(built)
+    if built.bonded is not None:  # the pictures' legend: adhesive and body, not plies
+        far_plies = far
+        far = lambda: {**far_plies(), "bonded": np.ones(1)}
     if built.dim == 3:
         j = (lat.index[:, 1] if built.lam is not None else built.width_index).astype(float)
         for t_snap in (t_end / 6, t_end):

@@ -8,7 +8,10 @@ from .closed_forms import CLOSED_FORMS
 from .schema import section
 
 _UNIT = {"point_displacement": ("mm", 1e3), "contact_force": ("kN", 1e-3), "delamination": ("mm", 1e3),
-         "ply_cracks": ("bonds", 1.0), "zone_edge_damage": ("", 1.0)}
+         "ply_cracks": ("bonds", 1.0), "zone_edge_damage": ("", 1.0), "applied_load": ("kN", 1e-3),
+         "fibre_stress": ("MPa", 1e-6), "flexural_cracks": ("mm", 1e3), "debonding": ("mm", 1e3)}
+# the series a panel draws, when not the probe's own name
+_SERIES = {"flexural_cracks": ("{n}_height",), "debonding": ("{n}_length", "{n}_damaged_length")}
 
 
 def histories(study, p: dict, h: dict, qoi: dict, plots_dir) -> None:
@@ -26,9 +29,15 @@ def histories(study, p: dict, h: dict, qoi: dict, plots_dir) -> None:
         ax.set_visible(False)
     for ax, (name, kind) in zip(axes.flat, panels):
         unit, scale = _UNIT.get(kind, ("", 1.0))
-        series = [s for s in h if s == name or (s.startswith(name + "_") and kind == "delamination")]
+        if kind in _SERIES:
+            series = [s.format(n=name) for s in _SERIES[kind] if s.format(n=name) in h]
+        else:
+            series = [s for s in h if s == name or (s.startswith(name + "_") and kind == "delamination")]
         for s in sorted(series):
             ax.plot(time, scale * np.asarray(h[s]), label=s if len(series) > 1 else None)
+        if f"no_fracture.{name}" in h:  # the all-FEM twin (case.no_fracture_reference)
+            ax.plot(1e3 * np.asarray(h["no_fracture.time"]), scale * np.asarray(h[f"no_fracture.{name}"]), "k:",
+                    label="no fracture (all-FEM)")
         for check, form in study.layout.names["checks"].items():
             if section(p, f"checks.{check}")["qoi"] in (f"peak_{name}", name):
                 ref = CLOSED_FORMS[form].reference_qoi
@@ -36,7 +45,8 @@ def histories(study, p: dict, h: dict, qoi: dict, plots_dir) -> None:
                     if key in qoi:
                         ax.axhline(scale * qoi[key], color="k", ls=":" if key == ref else "--",
                                    label=key.replace("_", " "))
-        ax.set(xlabel="time (ms)", ylabel=f"{name.replace('_', ' ')}" + (f" ({unit})" if unit else ""))
+        what = {"flexural_cracks": " height", "debonding": "ed length"}.get(kind, "")
+        ax.set(xlabel="time (ms)", ylabel=f"{name.replace('_', ' ')}{what}" + (f" ({unit})" if unit else ""))
         if ax.get_legend_handles_labels()[0]:
             ax.legend(fontsize=7)
     fig.tight_layout()
@@ -61,6 +71,8 @@ def damage(h: dict, plots_dir) -> None:
         else:
             sections = [(np.ones(len(x), bool), [0, 1], "", None)]
         wide = 12 if fem is None else 16
+        legend = (": adhesive (blue) and cracks in the body (orange), darker = more damaged" if f"{name}.bonded" in h
+                  else ": interlaminar (blue) and intralaminar (red: 90 plies, orange: 0 plies), darker = more damaged")
         fig, axes = plt.subplots(len(sections), 1, figsize=(wide, 3.2 * len(sections)), squeeze=False)
         for ax, (on, cols, label, plane) in zip(axes[:, 0], sections):
             if fem is not None:
@@ -68,8 +80,7 @@ def damage(h: dict, plots_dir) -> None:
                            cols, plane)
             _section(ax, h, name, x, in_90, on, cols)
             ax.set(xlabel="x (mm)", ylabel=f"{'yz'[cols[1] - 1]} (mm)",
-                   title=f"damage at {name.split('_')[1]}" + (f", {label}" if label else ": interlaminar (blue) and "
-                   "intralaminar (red: 90 plies, orange: 0 plies), darker = more damaged")
+                   title=f"damage at {name.split('_')[1]}" + (f", {label}" if label else legend)
                    + ("; FEM far field grey" if fem is not None else ""))
             ax.set_aspect("equal")
         fig.tight_layout()
