@@ -26,36 +26,38 @@ sys.path.insert(0, str(ROOT))
 # (label, the paper's observation, settings, step: "element" or "element/10")
 SETTINGS = [
     ("1 one-point, hourglass control off, penalties 2e12", "unstable: layer separation and hourglass modes",
-     {"fem.integration": "reduced", "fem.hourglass": "none", "contact.penalty": 2e12, "interface.penalty": 2e12},
+     {"fem.integration": "reduced", "fem.hourglass": "none", "impactors.rod.penalty": 2e12, "interfaces.table3.penalty": 2e12},
      "element"),
     ("2 one-point + hourglass control, rod penalty 2e10", "rod passes through the plate",
-     {"fem.integration": "reduced", "contact.penalty": 2e10, "interface.penalty": 2e12}, "element"),
+     {"fem.integration": "reduced", "impactors.rod.penalty": 2e10, "interfaces.table3.penalty": 2e12}, "element"),
     ("3 one-point + hourglass control, penalties 2e12", "much better",
-     {"fem.integration": "reduced", "contact.penalty": 2e12, "interface.penalty": 2e12}, "element"),
+     {"fem.integration": "reduced", "impactors.rod.penalty": 2e12, "interfaces.table3.penalty": 2e12}, "element"),
     ("4 one-point + hourglass control, rod 2e14 / layers 2e12", "top layer distorts, fatal hourglassing",
-     {"fem.integration": "reduced", "contact.penalty": 2e14, "interface.penalty": 2e12}, "element"),
+     {"fem.integration": "reduced", "impactors.rod.penalty": 2e14, "interfaces.table3.penalty": 2e12}, "element"),
     ("5 one-point + hourglass control, penalties 2e14, step / 10", "best: runs to 0.4 ms",
-     {"fem.integration": "reduced", "contact.penalty": 2e14, "interface.penalty": 2e14}, "element/10"),
+     {"fem.integration": "reduced", "impactors.rod.penalty": 2e14, "interfaces.table3.penalty": 2e14}, "element/10"),
     ("6 full integration, penalties 2e14, step / 10", "(not in the paper)",
-     {"fem.integration": "full", "contact.penalty": 2e14, "interface.penalty": 2e14}, "element/10"),
+     {"fem.integration": "full", "impactors.rod.penalty": 2e14, "interfaces.table3.penalty": 2e14}, "element/10"),
     ("7 full integration, penalties 2e12", "(not in the paper)",
-     {"fem.integration": "full", "contact.penalty": 2e12, "interface.penalty": 2e12}, "element"),
+     {"fem.integration": "full", "impactors.rod.penalty": 2e12, "interfaces.table3.penalty": 2e12}, "element"),
     ("8 full integration, rod penalty 2e10", "(not in the paper)",
-     {"fem.integration": "full", "contact.penalty": 2e10, "interface.penalty": 2e12}, "element"),
+     {"fem.integration": "full", "impactors.rod.penalty": 2e10, "interfaces.table3.penalty": 2e12}, "element"),
 ]
 
 
 def element_step() -> float:
     """s, the stable step of the coarse plate's elements alone (0.9 x the estimate)."""
     from coupling.case import load_case
-    from coupling.scenes import rod_impact
+    from coupling.study.assemble import laminate
+    from coupling.study.disc import disc_mesh
     from fem_region.elements import ELEMENTS
     from fem_region.region import FemRegion
     import numpy as np
     p = load_case("rod_impact_coarse").parameters
-    m, layer, _, _ = rod_impact.plate_mesh(p)
-    C = np.array([rod_impact.layer_C(p, 0.0), rod_impact.layer_C(p, 90.0)])[layer]
-    return 0.9 * FemRegion(m, ELEMENTS["hex8"], C, p["plate.rho"], 1.0, "full", "linear").critical_dt()
+    lam = laminate(p, p["geometry.laminate"])
+    m, run, _, _ = disc_mesh(p, lam, core=False)
+    C = np.array([lam.C(a) for a in lam.angles])[run]
+    return 0.9 * FemRegion(m, ELEMENTS["hex8"], C, lam.ply["rho"], 1.0, "full", "linear").critical_dt()
 
 
 def main() -> int:

@@ -246,11 +246,11 @@ def test_rod_impact_bad_settings_are_caught(femdem):
     penalty of 2e14 Pa/m at the elements' own step (exit 2, refused with the limit), a soft
     rod penalty that lets the rod sink into the plate (exit 3, penetration)."""
     code, s, err = femdem("run", "rod_impact_coarse", "--set=fem.integration=reduced", "--set=fem.hourglass=none",
-                          "--set=contact.penalty=2e12", "--set=interface.penalty=2e12", "--set=clock.dt=2.7e-7")
+                          "--set=impactors.rod.penalty=2e12", "--set=interfaces.table3.penalty=2e12", "--set=clock.dt=2.7e-7")
     assert code == 3 and "hourglass deformation" in s["message"], (code, err)
     code, s, err = femdem("run", "rod_impact_coarse", "--set=clock.dt=2.7e-7")
     assert code == 2 and "clock.dt" in err and "allowed <=" in err and s is None
-    code, s, err = femdem("run", "rod_impact_coarse", "--set=contact.penalty=2e10", "--set=interface.penalty=2e12",
+    code, s, err = femdem("run", "rod_impact_coarse", "--set=impactors.rod.penalty=2e10", "--set=interfaces.table3.penalty=2e12",
                           "--set=clock.dt=2.7e-7")
     assert code == 3 and "penetrates" in s["message"], (code, err)
 

@@ -161,3 +161,31 @@ class NodeBondForces:
     def restore_state(self, d: dict) -> None:
         self.bonds.restore_state(d["bonds"])
         self.last = float(d["last"])
+
+
+def cohesive_node_bonds(dyn: ExplicitDynamics, pairs: np.ndarray, area: np.ndarray, law, friction: float):
+    """LawBonds joining coincident FEM nodes across a ply interface (a cohesive far field):
+    pairs (k, 2) lower / upper node, area (k,) m^2 each pair stands for; evaluated on the nodes
+    at each force evaluation, their stable step (Gershgorin, 2 k on the lighter node) joins the
+    FEM's."""
+    from physics.law_bonds import LawBonds
+    # coincident nodes: the bond normal is the plate normal (+z from the lower ply)
+    bonds = LawBonds(pairs, dyn.region.X, np.tile([0.0, 0.0, 1.0], (len(pairs), 1)), area, law,
+                     friction=friction, label="interlaminar")
+    dyn.node_forces = [FemNodes(dyn).model(bonds, dyn)]
+    k_bond = law.K * area
+    m_pair = np.minimum(dyn.m[pairs[:, 0]], dyn.m[pairs[:, 1]])
+    dyn.critical_dt_extra = float(np.min(2.0 / np.sqrt(2 * 2 * k_bond / np.maximum(m_pair, 1e-300))))
+    return bonds
+
+
+def energies_with(energies, families):
+    """An energy ledger that adds law bonds evaluated on FEM nodes (stored and dissipated)."""
+    def total():
+        e = dict(energies())
+        for b in families:
+            eb = b.energies()
+            e["internal"] += eb["internal"]
+            e["dissipated"] += eb["dissipated"]
+        return e
+    return total

@@ -13,6 +13,7 @@ from ..params import CaseError
 from . import closed_forms, fields, probes
 from .assemble import beam, plate
 from .bonded import bonded_beam, resolve_files
+from .disc import disc
 from .schema import BONDED, LAMINATED, MODES, document, parameters
 
 __all__ = ["Study", "document_schema", "renamed"]
@@ -44,13 +45,14 @@ class Study:
         self._no_fracture = {}
         shape = self.PARAMETERS["geometry.shape"].default
         self._shape_tables(shape, data)
-        want = {"beam": ("x", "quad4"), "beam_3d": ("xy", "hex8"), "plate": ("xy", "hex8"),
+        want = {"beam": ("x", "quad4"), "beam_3d": ("xy", "hex8"), "plate": ("xy", "hex8"), "disc": ("xy", "hex8"),
                 "bonded_beam": ("x", "quad4"), "bonded_beam_3d": ("xy", "hex8")}[shape]
-        at = {"plate": "edges"}.get(shape, "ends")
+        at = {"plate": "edges", "disc": "rim"}.get(shape, "ends")
         for name_, kind in self.layout.names["supports"].items():
             if kind != at:
                 raise CaseError(f"supports.{name_}.at = {kind!r}: geometry.shape = {shape!r} is supported at its {at}")
-        shapes = {"plate": ("sphere",), "bonded_beam": (), "bonded_beam_3d": ()}.get(shape, ("cylinder",))
+        shapes = {"plate": ("sphere",), "disc": ("rod",), "bonded_beam": (), "bonded_beam_3d": ()}.get(shape,
+                                                                                                      ("cylinder",))
         for name_, kind in self.layout.names["impactors"].items():
             if kind not in shapes:
                 raise CaseError(f"impactors.{name_}.shape = {kind!r}: geometry.shape = {shape!r} takes "
@@ -58,7 +60,7 @@ class Study:
         for key, value in zip(("geometry.symmetry", "mesh.element"), want):
             if self.PARAMETERS[key].default != value:
                 raise CaseError(f"{key} = {self.PARAMETERS[key].default!r}: geometry.shape = {shape!r} takes {value!r}")
-        if shape in ("beam", "bonded_beam") and "elements_width" in data.get("mesh", {}):
+        if shape in ("beam", "bonded_beam") and "elements_width" in data.get("mesh", {}):  # (before the pop)
             raise CaseError(f"mesh.elements_width: has no effect on a slice; allowed: leave it out, or "
                             f"geometry.shape = '{shape}_3d'")
         for name_, kind in self.layout.names["checks"].items():
@@ -72,18 +74,24 @@ class Study:
         material, depth, one sheet and one load; keys of the other kind are refused."""
         P, names = self.PARAMETERS, self.layout.names
         given = lambda table, key: key in data.get(table, {})
-        if shape in LAMINATED:
-            need = [("geometry", "laminate")]
-            refuse = [("geometry", k) for k in ("material", "depth", "length")] + [("zone", "particle_size")] + \
+        if shape == "disc":
+            need = [("geometry", "laminate"), ("zone", "particle_size")]
+            refuse = [("geometry", k) for k in ("material", "depth", "length", "width")] + \
+                [("zone", "plies_per_particle"), ("mesh", "elements_width"), ("mesh", "element_ratio")] + \
                 [("mesh", k) for k in ("growth", "max_size")]
             refuse_tables = ("sheets", "loads")
+        elif shape in LAMINATED:
+            need = [("geometry", "laminate"), ("geometry", "width")]
+            refuse = [("geometry", k) for k in ("material", "depth", "length")] + [("zone", "particle_size")] + \
+                [("mesh", k) for k in ("growth", "max_size", "elements_per_ply")]
+            refuse_tables = ("sheets", "loads")
         else:
-            need = [("geometry", "material"), ("geometry", "depth"), ("zone", "particle_size")]
-            refuse = [("geometry", "laminate"), ("zone", "plies_per_particle"), ("mesh", "elements_along"),
-                      ("mesh", "element_ratio")]
+            need = [("geometry", "material"), ("geometry", "depth"), ("geometry", "width"), ("zone", "particle_size")]
+            refuse = [("geometry", "laminate"), ("zone", "plies_per_particle"), ("zone", "ply_failure"),
+                      ("mesh", "elements_along"), ("mesh", "element_ratio"), ("mesh", "elements_per_ply")]
             refuse_tables = ("laminates", "impactors")
         for table, key in need:
-            if not given(table, key):
+            if not given(table, key) or P[f"{table}.{key}"].default in (0, ""):
                 raise CaseError(f"{table}.{key}: required for geometry.shape = {shape!r} ({P[f'{table}.{key}'].doc})")
         for table, key in refuse:
             if given(table, key):
@@ -91,6 +99,10 @@ class Study:
         for table in refuse_tables:
             if names.get(table):
                 raise CaseError(f"[{table}.{next(iter(names[table]))}]: geometry.shape = {shape!r} takes none")
+        if shape in ("beam", "bonded_beam"):
+            refuse.append(("mesh", "elements_width"))
+        for table, key in refuse:  # not this shape's: not listed, not settable
+            P.pop(f"{table}.{key}", None)
         if shape in BONDED:
             for table in ("sheets", "loads"):
                 if len(names[table]) != 1:
@@ -106,6 +118,10 @@ class Study:
             for name_, kind in names["materials"].items():
                 if kind != "ply":
                     raise CaseError(f"materials.{name_}.kind = {kind!r}: geometry.shape = {shape!r} takes ply materials")
+            for name_ in names["laminates"]:
+                if shape != "disc" and P[f"laminates.{name_}.far_field_interfaces"].default == "cohesive":
+                    raise CaseError(f"laminates.{name_}.far_field_interfaces = 'cohesive': built for the disc only "
+                                    f"so far (issue #24); allowed for geometry.shape = {shape!r}: 'tied'")
 
     def resolve_files(self, p: dict, folder) -> None:
         """Files a study reads (load curves), relative to its case file's folder."""
@@ -129,7 +145,7 @@ class Study:
             or key in ("geometry.shape", "zone.shape", "geometry.symmetry")
 
     def build(self, p: dict, mode: str, dem: str):
-        assemble = {"plate": plate, "bonded_beam": bonded_beam, "bonded_beam_3d": bonded_beam}
+        assemble = {"plate": plate, "disc": disc, "bonded_beam": bonded_beam, "bonded_beam_3d": bonded_beam}
         sim, built = assemble.get(p["geometry.shape"], beam)(self, p, mode, dem)
         sim.probes.update(probes.series(self, built, p))
         size = float(built.fem_elements + (built.lattice.n if built.lattice is not None else 0))
@@ -215,13 +231,22 @@ def renamed(key: str, study: Study) -> str | None:
         return f"materials.{study.PARAMETERS[f'laminates.{lam}.material'].default}.{tail}"
     if key.startswith("interface.") and one("interfaces"):
         return f"interfaces.{one('interfaces')}.{tail}"
+    if key.startswith(("plate.", "rod.")) and one("impactors"):  # the former rod_impact scene's
+        lam = study.PARAMETERS["geometry.laminate"].default
+        table = f"materials.{study.PARAMETERS[f'laminates.{lam}.material'].default}" if key.startswith("plate.") \
+            else f"impactors.{one('impactors')}"
+        return f"{table}.{tail}"
     if key.startswith("impactor.") and one("impactors"):
         return f"impactors.{one('impactors')}.{tail}"
     if key.startswith(("concrete.", "cfrp.", "bond.", "load.", "crack.")) and names["sheets"]:
         return _renamed_bonded(key, study)
     return {"dem.half_width": "zone.half_width", "dem.plies_per_row": "zone.plies_per_particle",
             "geometry.half_span": "geometry.span (the whole span)", "laminate.layup": f"laminates.{one('laminates')}.layup",
-            "laminate.ply_thickness": f"laminates.{one('laminates')}.ply_thickness"}.get(key)
+            "laminate.ply_thickness": f"laminates.{one('laminates')}.ply_thickness",
+            "geometry.radius": "geometry.span (the diameter)", "mesh.radial": "mesh.elements_along",
+            "mesh.per_layer": "mesh.elements_per_ply",
+            "geometry.layer_thickness": f"laminates.{one('laminates')}.ply_thickness",
+            "contact.penalty": f"impactors.{one('impactors')}.penalty"}.get(key)
 
 
 def _renamed_bonded(key: str, study: Study) -> str | None:

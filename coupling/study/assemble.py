@@ -45,6 +45,7 @@ class Laminate:
     ply_thickness: float  # m
     ply: dict  # the [materials.*] fields
     interface: dict  # the [interfaces.*] fields
+    elastic: bool = False  # the plies do not fail (zone.ply_failure = false)
 
     @property
     def thickness(self) -> float:
@@ -68,7 +69,11 @@ class Laminate:
         return self.stiffness(angle, 3)
 
     def strengths(self) -> HoffmanStrengths:
-        """The ply's nine Hoffman strengths, transversely isotropic (Zt = Yt, Zc = Yc, S13 = S12)."""
+        """The ply's nine Hoffman strengths, transversely isotropic (Zt = Yt, Zc = Yc, S13 = S12);
+        infinite when the plies are elastic."""
+        if self.elastic:
+            inf = np.inf
+            return HoffmanStrengths(Xt=inf, Xc=inf, Yt=inf, Yc=inf, Zt=inf, Zc=inf, S23=inf, S13=inf, S12=inf)
         m = self.ply
         return HoffmanStrengths(Xt=m["Xt"], Xc=m["Xc"], Yt=m["Yt"], Yc=m["Yc"], Zt=m["Yt"], Zc=m["Yc"], S23=m["S23"],
                                 S13=m["S12"], S12=m["S12"])
@@ -140,11 +145,15 @@ class Built:
     load_probes: dict = field(default_factory=dict)
     fibre_stiffness: np.ndarray | None = None
     edge_intra: bool = False
+    node_bonds: LawBonds | None = None  # a cohesive far field's node-pair bonds (study/disc.py)
 
 
 def body_of(p: dict, mode: str) -> Built:
     """The body's laminate and particle size, before its participants exist."""
     lam = laminate(p, p["geometry.laminate"])
+    lam.elastic = not p["zone.ply_failure"]
+    if p["geometry.shape"] == "disc":
+        return Built(p, mode, lam, 0.5 * p["geometry.span"], p["zone.particle_size"], 4.0, dim=3)  # a quarter
     k = p["zone.plies_per_particle"]
     if any(n % k for n in lam.plies):
         raise CaseError(f"zone.plies_per_particle = {k}: must divide every ply run of the laminate ({lam.plies})")

@@ -82,6 +82,30 @@ def plate_spring_mass(study, p: dict, f: dict | None = None) -> float:
     return q["velocity"] * np.sqrt(M / k)
 
 
+def disc_spring_mass(study, p: dict, f: dict | None = None) -> float:
+    """Peak centre deflection (m) of a clamped circular laminated plate struck by a rod:
+    v sqrt(M / k), 1 / k = R^2 / (16 pi D) + ln(R / r) / (2 pi kappa G t): bending with D of
+    the plies about the mid-plane (the mean of the two in-plane directions) in series with
+    transverse shear (Mindlin, load on the rod's disc of radius r, kappa = 5/6, G the mean of
+    G12 and G23, t the thickness); M the whole rod's mass plus a fifth of the plate's."""
+    from fem_region import materials
+    from .assemble import laminate
+    lam = laminate(p, p["geometry.laminate"])
+    z = np.cumsum([0] + lam.plies) * lam.ply_thickness - lam.thickness / 2
+    D = 0.0
+    for angle, z0, z1 in zip(lam.angles, z[:-1], z[1:]):
+        Q = materials.plane_stress(lam.C(angle))
+        D += 0.5 * (Q[0, 0] + Q[1, 1]) * (z1**3 - z0**3) / 3
+    R, H = 0.5 * p["geometry.span"], lam.thickness
+    (imp,) = study.layout.names["impactors"]
+    q = section(p, f"impactors.{imp}")
+    k_bending = 16 * np.pi * D / R**2
+    G = 0.5 * (lam.ply["G12"] + lam.ply["G23"])
+    k_shear = 2 * np.pi * 5 / 6 * G * H / np.log(R / q["radius"])
+    M = q["rho"] * np.pi * q["radius"] ** 2 * q["length"] + 0.2 * lam.ply["rho"] * H * np.pi * R**2
+    return q["velocity"] * np.sqrt(M * (1 / k_bending + 1 / k_shear))
+
+
 def beam_spring_mass_bracket(study, p: dict, f: dict | None = None) -> tuple[float, float]:
     """(intact, fully delaminated) spring-mass estimates of the peak centre deflection (m): a
     beam that delaminates lies between them."""
@@ -107,6 +131,10 @@ CLOSED_FORMS: dict[str, ClosedForm] = {
         "(bonded beams; a first crack should appear then)", "elastic_cracking_time", elastic_cracking_time,
         "the no-fracture FEM's bottom fibre at mid-span reaches (1 - scatter) ft",
         {**_CHECK, "probe": Param("", "the fibre_stress probe read in the all-FEM twin", kind="str")}, costly=True),
+    "disc_spring_mass": ClosedForm(
+        "spring-mass estimate of a clamped disc's peak deflection under a rod: plate bending and transverse shear in "
+        "series (an estimate)", "spring_mass_estimate", disc_spring_mass,
+        "spring-mass estimate v sqrt(M / k), plate bending and shear in series (an estimate)"),
     "test_value": ClosedForm(
         "a value measured in a test (independent data), within tol", "", lambda study, p, f: f["value"], "",
         {**_CHECK, "value": Param(0.0, "the measured value (SI)"), "source": _SOURCE}),

@@ -9,16 +9,24 @@ from .schema import section
 
 _UNIT = {"point_displacement": ("mm", 1e3), "contact_force": ("kN", 1e-3), "delamination": ("mm", 1e3),
          "ply_cracks": ("bonds", 1.0), "zone_edge_damage": ("", 1.0), "applied_load": ("kN", 1e-3),
-         "fibre_stress": ("MPa", 1e-6), "flexural_cracks": ("mm", 1e3), "debonding": ("mm", 1e3)}
+         "fibre_stress": ("MPa", 1e-6), "flexural_cracks": ("mm", 1e3), "debonding": ("mm", 1e3),
+         "impactor_motion": ("m/s", 1.0), "interface_damage": ("mm^2", 1e6)}
 # the series a panel draws, when not the probe's own name
-_SERIES = {"flexural_cracks": ("{n}_height",), "debonding": ("{n}_length", "{n}_damaged_length")}
+_SERIES = {"flexural_cracks": ("{n}_height",), "debonding": ("{n}_length", "{n}_damaged_length"),
+           "impactor_motion": ("{n}_velocity",), "interface_damage": ("debonded_area", "damaged_area")}
+
+
+def _series(name: str, kind: str, h: dict) -> list[str]:
+    """The history series of probe ``name`` a panel draws."""
+    if kind in _SERIES:
+        return [s.format(n=name) for s in _SERIES[kind] if s.format(n=name) in h]
+    return [s for s in h if s == name or (s.startswith(name + "_") and kind == "delamination")]
 
 
 def histories(study, p: dict, h: dict, qoi: dict, plots_dir) -> None:
     """histories.png: one panel per probe against time (ms); a check's reference dotted."""
     import matplotlib.pyplot as plt
-    panels = [(n, k) for n, k in study.layout.names["probes"].items() if any(s == n or s.startswith(n + "_")
-                                                                              for s in h)]
+    panels = [(n, k) for n, k in study.layout.names["probes"].items() if _series(n, k, h)]
     if not panels:
         return
     time = 1e3 * np.asarray(h["time"])
@@ -29,10 +37,7 @@ def histories(study, p: dict, h: dict, qoi: dict, plots_dir) -> None:
         ax.set_visible(False)
     for ax, (name, kind) in zip(axes.flat, panels):
         unit, scale = _UNIT.get(kind, ("", 1.0))
-        if kind in _SERIES:
-            series = [s.format(n=name) for s in _SERIES[kind] if s.format(n=name) in h]
-        else:
-            series = [s for s in h if s == name or (s.startswith(name + "_") and kind == "delamination")]
+        series = _series(name, kind, h)
         for s in sorted(series):
             ax.plot(time, scale * np.asarray(h[s]), label=s if len(series) > 1 else None)
         if f"no_fracture.{name}" in h:  # the all-FEM twin (case.no_fracture_reference)
@@ -45,7 +50,8 @@ def histories(study, p: dict, h: dict, qoi: dict, plots_dir) -> None:
                     if key in qoi:
                         ax.axhline(scale * qoi[key], color="k", ls=":" if key == ref else "--",
                                    label=key.replace("_", " "))
-        what = {"flexural_cracks": " height", "debonding": "ed length"}.get(kind, "")
+        what = {"flexural_cracks": " height", "debonding": "ed length", "impactor_motion": " velocity",
+                "interface_damage": " area"}.get(kind, "")
         ax.set(xlabel="time (ms)", ylabel=f"{name.replace('_', ' ')}{what}" + (f" ({unit})" if unit else ""))
         if ax.get_legend_handles_labels()[0]:
             ax.legend(fontsize=7)

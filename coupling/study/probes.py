@@ -190,6 +190,33 @@ def _debond_qoi(name, f, h):
             "sheet_broken_bonds": float(h[f"{name}_sheet_broken"][-1])}
 
 
+def _motion_series(built, name, f):
+    """An impactor's velocity into the structure (m/s, positive towards it) and how far its face
+    has moved in (m)."""
+    imp = built.impactors[f["impactor"]]
+    rigid = imp.imp if hasattr(imp, "imp") else imp
+    up, z0 = built.dim - 1, float(rigid.x[built.dim - 1])
+    return {f"{name}_velocity": lambda: float(-rigid.v[up]), f"{name}_displacement": lambda: float(-(rigid.x[up] - z0))}
+
+
+def _separation(*families) -> float:
+    """m, the largest opening of the interface bonds."""
+    return float(max(max(np.einsum("bi,bi->b", b.delta, b.normal).max(initial=0.0), 0.0) for b in families))
+
+
+def _interface_damage_series(built, name, f):
+    """Over every ply interface, the far field's node-pair bonds and the zone's together, whole
+    structure: debonded and damaged (d > 0) areas (m^2), the largest opening (m)."""
+    fams = [b for b in (built.node_bonds, built.inter) if b is not None]
+    if not fams:
+        return {}
+    w = built.width_factor
+    area = [b.area for b in fams]
+    return {"debonded_area": lambda: float(w * sum(a @ b.failed() for a, b in zip(area, fams))),
+            "damaged_area": lambda: float(w * sum(a @ (b.damage > 0) for a, b in zip(area, fams))),
+            "layer_separation": lambda: _separation(*fams)}
+
+
 def _when(*series):
     """A qoi function that reports only when the probe made its series in this mode."""
     def wrap(fn):
@@ -227,6 +254,19 @@ PROBES: dict[str, ProbeKind] = {
         "largest interlaminar damage near the zone's edge (1: the zone is too narrow); qoi: its maximum",
         {"columns": Param(2, "particle columns counted from the edge", kind="int", low=0, high=100)},
         _zone_edge_series, _max_qoi),
+    "impactor_motion": ProbeKind(
+        "an impactor's velocity into the structure and its face's travel; qoi final_NAME_velocity",
+        {"impactor": Param("", "the impactor (an [impactors.*] name)", kind="str")},
+        _motion_series, _when("{name}_velocity")(lambda name, f, h: {f"final_{name}_velocity":
+                                                                       float(h[f"{name}_velocity"][-1])})),
+    "interface_damage": ProbeKind(
+        "all ply interfaces together (FEM node pairs and particles), whole structure: debonded_area, damaged_area "
+        "(m^2), layer_separation (largest opening, m); qoi debonded_area, damaged_area (final), "
+        "peak_layer_separation",
+        {}, _interface_damage_series,
+        _when("debonded_area")(lambda name, f, h: {"debonded_area": float(h["debonded_area"][-1]),
+                                                   "damaged_area": float(h["damaged_area"][-1]),
+                                                   "peak_layer_separation": float(np.max(h["layer_separation"]))})),
     "applied_load": ProbeKind(
         "the whole load a [loads.*] applies (N); qoi peak_NAME",
         {"load": Param("", "the load (a [loads.*] name)", kind="str")},
@@ -267,6 +307,6 @@ def qoi(study, p: dict, history: dict) -> dict:
         fields = section(p, f"probes.{name}")
         if kind == "debonding":  # the fraction is of the sheet's length, the beam's
             fields["beam_length"] = p["geometry.length"] or p["geometry.span"]
-        if any(k == name or k.startswith(name + "_") for k in history):
+        if kind == "interface_damage" or any(k == name or k.startswith(name + "_") for k in history):
             out.update(PROBES[kind].qoi(name, fields, history))
     return out

@@ -16,17 +16,20 @@ Sections (one concept, one key):
                 thickness, centred on x = 0), "beam_3d" (a quarter of it, the thickness along
                 z), "plate" (a quarter of a rectangular plate), "bonded_beam" (a plane-stress
                 slice of a beam of one isotropic material with a sheet bonded under it) or
-                "bonded_beam_3d" (a quarter of it); its laminate or material and depth, span,
+                "bonded_beam_3d" (a quarter of it) or "disc" (a quarter of a circular plate); its
+                laminate (with tied or cohesive FEM interfaces) or material and depth, span,
                 width, length, symmetry
 - mesh:         FEM elements and their sizing, graded towards the zone
 - fem:          the FEM's integration and formulation
 - zone:         the DEM damage zone: shape "box" (|x| <= half_width, the whole thickness),
-                plies_per_particle (laminates) or particle_size (bonded beams)
-- supports.*:   at "ends" (a beam's, x = +-span / 2) or "edges" (a plate's), condition clamped
-                or simply_supported
+                plies_per_particle (laminates) or particle_size (bonded beams, the disc),
+                ply_failure
+- supports.*:   at "ends" (a beam's, x = +-span / 2), "edges" (a plate's) or "rim" (a disc's),
+                condition clamped or simply_supported
 - impactors.*:  shape "cylinder" (a beam's, along its width, on the top face at x = 0: radius,
                 mass_per_width, velocity, penalty, friction) or "sphere" (a plate's, on its centre:
-                radius, mass, velocity, penalty, friction)
+                radius, mass, velocity, penalty, friction) or "rod" (a disc's, flat-faced, on its
+                centre: radius, length, rho, velocity, penalty per area)
 - loads.*:      kind "patch" (a bonded beam's: a force history on its top face about x = 0, as
                 a curve of [time, force] rows or a CSV file, with scale factors)
 - probes.*:     kind from the registry (study/probes.py), with what the run reports of them
@@ -46,8 +49,8 @@ from ..params import CaseError, Param, density, modulus, positive
 from ..participants.coupled import COUPLING
 
 REQUIRED = None  # a field's default when the file must give it
-SHAPES = ("beam", "beam_3d", "plate", "bonded_beam", "bonded_beam_3d")
-LAMINATED, BONDED = ("beam", "beam_3d", "plate"), ("bonded_beam", "bonded_beam_3d")
+SHAPES = ("beam", "beam_3d", "plate", "disc", "bonded_beam", "bonded_beam_3d")
+LAMINATED, BONDED = ("beam", "beam_3d", "plate", "disc"), ("bonded_beam", "bonded_beam_3d")
 
 
 def _ratio(default, doc, low=0.0, high=0.49):
@@ -101,6 +104,9 @@ KINDS: dict[str, dict[str, dict[str, Param]]] = {
             "GIc": _toughness("mode I toughness (area of the linear softening)"),
             "GIIc": _toughness("mode II toughness"),
             "friction": Param(0.3, "Coulomb friction of debonded faces", low=0.0, high=2.0),
+            "penalty": Param(0.0, "stiffness per area of the FEM's node-pair bonds where the far field carries "
+                             "this interface (laminates' far_field_interfaces = 'cohesive'; 0: not used)",
+                             unit="Pa/m", low=0.0),
         },
     },
     "impactors": {
@@ -111,6 +117,14 @@ KINDS: dict[str, dict[str, dict[str, Param]]] = {
             "penalty": Param(0.0, "contact penalty per particle / node; 0 = E22 times the particle size",
                              unit="N/m", low=0.0),
             "friction": Param(0.2, "impactor friction", low=0.0, high=2.0),
+        },
+        "rod": {  # a disc's: a flat-faced rod along z on its centre
+            "radius": positive(REQUIRED, "rod radius", "m"),
+            "length": positive(REQUIRED, "rod length (its mass with rho)", "m"),
+            "rho": density(REQUIRED, "rod density"),
+            "velocity": positive(REQUIRED, "impact speed (downwards, on the top face at the centre)", "m/s"),
+            "penalty": positive(REQUIRED, "contact penalty per area (Pa/m): a FEM node gets it times its tributary "
+                                "area, a particle times d^2", "Pa/m"),
         },
         "cylinder": {
             "radius": positive(REQUIRED, "cylinder radius", "m"),
@@ -145,6 +159,9 @@ KINDS: dict[str, dict[str, dict[str, Param]]] = {
             "condition": Param("clamped", "clamped (the end face held) or simply_supported (its bottom edge held "
                                "vertically)", kind="str", choices=("clamped", "simply_supported")),
         },
+        "rim": {  # a disc's, at radius span / 2
+            "condition": Param("clamped", "clamped (every DOF of the rim held)", kind="str", choices=("clamped",)),
+        },
         "edges": {  # a plate's, at x = +-span / 2 and y = +-width / 2
             "condition": Param("clamped", "clamped (the edge faces held) or simply_supported (their bottom edges "
                                "held vertically)", kind="str", choices=("clamped", "simply_supported")),
@@ -162,6 +179,10 @@ LAMINATE = {
     "ply_thickness": positive(REQUIRED, "ply thickness", "m"),
     "material": Param(REQUIRED, "the plies' material (a [materials.*] name)", kind="str"),
     "interface": Param(REQUIRED, "the law between plies of different angle (an [interfaces.*] name)", kind="str"),
+    "far_field_interfaces": Param("tied", "in the FEM: tied (the plies share nodes: no delamination outside the "
+                                  "zone) or cohesive (the plies of different angle meshed apart, their coincident "
+                                  "nodes joined by the interface's Hashin law with its penalty; the disc)",
+                                  kind="str", choices=("tied", "cohesive")),
 }
 
 SECTIONS: dict[str, dict[str, Param]] = {
@@ -169,6 +190,7 @@ SECTIONS: dict[str, dict[str, Param]] = {
         "shape": Param("beam", "beam: a plane-strain slice of a laminated beam along x, centred on x = 0; "
                        "beam_3d: a quarter of it (x = 0 and mid-width y = 0 symmetry planes), thickness along z; "
                        "plate: a quarter of a rectangular plate, span along x and width along y, centred on x = y = 0; "
+                       "disc: a quarter of a circular plate of diameter span, clamped at its rim; "
                        "bonded_beam: a plane-stress slice of a beam of one isotropic material with a sheet bonded "
                        "to its bottom face; bonded_beam_3d: a quarter of it",
                        kind="str", choices=SHAPES),
@@ -178,14 +200,17 @@ SECTIONS: dict[str, dict[str, Param]] = {
         "length": Param(0.0, "the beam's length, supports inside it at +-span / 2 (bonded beams); 0: the span",
                         unit="m", low=0.0),
         "span": positive(REQUIRED, "distance between the supports", "m"),
-        "width": positive(REQUIRED, "width out of the slice's plane (forces are reported for the whole width)", "m"),
+        "width": Param(0.0, "width out of the slice's plane (forces are reported for the whole width); not a "
+                       "disc's", unit="m", low=0.0),
         "symmetry": Param("x", "the symmetry planes: x (beam: half model about x = 0) or xy (beam_3d: also "
                           "mid-width y = 0; plate)", kind="str", choices=("x", "xy")),
     },
     "mesh": {
         "element": Param("quad4", "element: quad4 (beam) or hex8 (beam_3d, plate)", kind="str",
                          choices=("quad4", "hex8")),
-        "elements_along": Param(30, "FEM elements between the zone and a support", kind="int", low=2),
+        "elements_along": Param(30, "FEM elements between the zone and a support (a disc: along its radius, a "
+                                "multiple of 8 puts a node ring on the rod's edge)", kind="int", low=2),
+        "elements_per_ply": Param(1, "a disc's: Hex8 elements through each ply", kind="int", low=1, high=8),
         "element_ratio": Param(6.0, "largest / smallest element length, graded from the zone", low=1.0, high=100.0),
         "elements_width": Param(4, "Hex8 elements across the modelled half width (beam_3d, bonded_beam_3d), or "
                                 "across the zone's half width (plate)", kind="int", low=1, high=200),
@@ -198,6 +223,9 @@ SECTIONS: dict[str, dict[str, Param]] = {
         "integration": Param("selective", "full, or selective (shear at the centroid: no shear locking)",
                              kind="str", choices=INTEGRATIONS),
         "formulation": Param("linear", "small-strain linear or Total Lagrangian", kind="str", choices=FORMULATIONS),
+        "hourglass": Param("stiffness", "hourglass control of one-point (reduced) elements: Flanagan-Belytschko "
+                           "stiffness or viscous, or none", kind="str", choices=("stiffness", "viscous", "none")),
+        "hourglass_kappa": Param(0.1, "hourglass coefficient", low=0.0, high=1.0),
     },
     "zone": {
         "shape": Param("box", "box: |x| <= half_width (a plate: and |y| <= half_width) through the whole "
@@ -205,8 +233,10 @@ SECTIONS: dict[str, dict[str, Param]] = {
         "half_width": positive(REQUIRED, "half width of the DEM zone about x = 0 (coupled mode)", "m"),
         "plies_per_particle": Param(1, "plies per particle row (the particle size is this x ply thickness; "
                                     "laminates)", kind="int", low=1, high=8),
-        "particle_size": Param(0.0, "lattice spacing d (bonded beams: the depth holds a whole number of rows)",
-                               unit="m", low=0.0),
+        "particle_size": Param(0.0, "lattice spacing d (bonded beams: the depth holds a whole number of rows; a "
+                               "disc: it divides the ply thickness and half_width)", unit="m", low=0.0),
+        "ply_failure": Param(True, "the plies fail by Hoffman in the zone; false: elastic plies (only the "
+                             "interfaces fail)", kind="bool"),
     },
     "coupling": {k.split(".", 1)[1]: v for k, v in COUPLING.items()},
 }

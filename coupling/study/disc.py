@@ -1,0 +1,254 @@
+"""The assembler of a disc: a quarter of a circular laminated plate (symmetry planes x = 0 and
+y = 0), clamped at its rim (diameter geometry.span), struck on its centre by a rod (the seed
+paper's example 5.3, the numerical-stability study).
+
+FEM: Hex8 on a quarter disc mapped from a square grid (mesh.elements_along per radius,
+mesh.elements_per_ply through each ply), Total Lagrangian or linear, full or one-point
+integration with Flanagan-Belytschko hourglass control. With the laminate's
+``far_field_interfaces = "cohesive"`` each interface between plies of different angle has
+its nodes doubled and joined node to node by the interface's Hashin law (its penalty K as
+stiffness per area, each pair standing for its node's tributary area), evaluated by the same
+law code as on particles. The rod is rigid, in penalty contact with the top surface
+(impactors.*.penalty per tributary area of a surface node).
+
+Coupled: the square [0, zone.half_width]^2 under the rod through the whole thickness is a 3D
+ply lattice (dem_region/ply_block.py) with the laminate's interface law between plies, the
+rod on its top particles (its edge rounded by the particle radius), the FEM plate around it
+an O-grid whose hole is the zone's square exactly, tied at x = a and y = a.
+
+Penalties are stiffness per area (Pa/m): a node gets penalty x its tributary area. This
+reading makes the paper's observations consistent: at 2e14 a surface node's contact mode
+needs dt < ~4e-7 s (hence its 1e-7 s), at 2e10 the rod sinks metres into the plate.
+"""
+from __future__ import annotations
+
+import numpy as np
+import skfem
+
+from dem_region import ply_block
+from dem_region.particle_impactor import ParticleImpactor
+from fem_region import mesh
+from fem_region.elements import ELEMENTS
+from fem_region.explicit import ExplicitDynamics, PrescribedMotion
+from fem_region.region import FemRegion
+from physics.impactor import RigidImpactor
+from physics.law_bonds import LawBonds
+from physics.laws import HashinCohesiveLaw
+
+from ..params import CaseError
+from ..participants.coupled import coupled_simulation
+from ..participants.dem import hold_symmetry_planes
+from ..participants.fem import cohesive_node_bonds, energies_with, fem_only
+from .assemble import Built, body_of
+from .schema import section
+
+
+def core_cells(p: dict) -> int:
+    """Grid cells along each side of the square hole the DEM zone fills (coupled mode)."""
+    return max(1, int(round(p["mesh.elements_along"] * p["zone.half_width"] / (0.5 * p["geometry.span"]))))
+
+
+def _map(u: np.ndarray, v: np.ndarray, p: dict, core: bool) -> tuple[np.ndarray, np.ndarray]:
+    """The square grid [0, 1]^2 onto the quarter disc. Without a core:
+    (u sqrt(1 - v^2 / 2), v sqrt(1 - u^2 / 2)). With one (an O-grid): the grid square
+    [0, s]^2 (s = core_cells / elements_along) onto the DEM zone's square [0, a]^2 exactly, and
+    each ray from it blended linearly from the square's side to the rim."""
+    R = 0.5 * p["geometry.span"]
+    if not core:
+        return R * u * np.sqrt(1 - v**2 / 2), R * v * np.sqrt(1 - u**2 / 2)
+    a, s = p["zone.half_width"], core_cells(p) / p["mesh.elements_along"]
+    rho = np.maximum(u, v)
+    w = np.clip((rho - s) / (1 - s), 0.0, 1.0)[None]
+    uv = np.array([u, v])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        square = np.nan_to_num(a * uv / rho)
+        circle = np.nan_to_num(R * uv / np.hypot(u, v))
+    out = np.where(rho >= s, (1 - w) * square + w * circle, a * uv / s)
+    return out[0], out[1]
+
+
+def disc_mesh(p: dict, lam, core: bool):
+    """(Hex8 quarter disc, run of each element (nel,), interface node pairs (k, 2) lower /
+    upper, grid key (n_nodes,) of each node on the (n + 1)^2 surface grid). With cohesive
+    far-field interfaces the nodes on each interface between runs are doubled (the upper
+    run's elements take the twins). core: the DEM zone's square left out."""
+    n, m, tp = p["mesh.elements_along"], p["mesh.elements_per_ply"], lam.ply_thickness
+    g = np.linspace(0.0, 1.0, n + 1)
+    box = mesh.box(g, g, np.linspace(0.0, lam.thickness, sum(lam.plies) * m + 1), "hex8")
+    P, T = box.p.copy(), box.t.copy()
+    tol = 1e-9 * tp
+    levels = np.cumsum(lam.plies)[:-1] * tp  # interfaces between runs, bottom up
+    run = np.searchsorted(levels, P[2, T].mean(axis=0))
+    pairs = []
+    if p[f"laminates.{p['geometry.laminate']}.far_field_interfaces"] == "cohesive":
+        for k, z in enumerate(levels):
+            on = np.flatnonzero(np.abs(P[2] - z) < tol)
+            twin = np.arange(P.shape[1])
+            twin[on] = P.shape[1] + np.arange(on.size)
+            P = np.hstack([P, P[:, on]])
+            above = run > k
+            T[:, above] = twin[T[:, above]]
+            pairs.append(np.column_stack([on, twin[on]]))
+    pairs = np.vstack(pairs) if pairs else np.zeros((0, 2), int)
+    u, v = P[0].copy(), P[1].copy()
+    P[0], P[1] = _map(u, v, p, core)
+    key = np.round(v * n) * (n + 1) + np.round(u * n)
+    if core:  # drop the hole's elements, then the nodes no element uses
+        s = core_cells(p) / n
+        keep = np.maximum(u[T].mean(axis=0), v[T].mean(axis=0)) > s
+        T, run = T[:, keep], run[keep]
+        used = np.unique(T)
+        renumber = np.full(P.shape[1], -1)
+        renumber[used] = np.arange(used.size)
+        P, T, key = P[:, used], renumber[T], key[used]
+        pairs = renumber[pairs]
+        pairs = pairs[(pairs >= 0).all(axis=1)]
+    return skfem.MeshHex1(np.ascontiguousarray(P), np.ascontiguousarray(T)), run, pairs, key.astype(int)
+
+
+def tributary_area(p: dict, core: bool) -> np.ndarray:
+    """((n + 1)^2,) m^2 by grid key: a quarter of each adjoining quad of the mapped surface grid
+    (none from the DEM zone's hole)."""
+    n = p["mesh.elements_along"]
+    g = np.linspace(0.0, 1.0, n + 1)
+    U, V = np.meshgrid(g, g)  # row = v, column = u: key = row (n + 1) + column
+    xy = np.stack(_map(U, V, p, core), axis=-1)
+    a = xy[1:, 1:] - xy[:-1, :-1]
+    b = xy[:-1, 1:] - xy[1:, :-1]
+    quad = 0.5 * np.abs(a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0])
+    if core:
+        c = core_cells(p)
+        quad[:c, :c] = 0.0
+    area = np.zeros((n + 1, n + 1))
+    for di in (0, 1):
+        for dj in (0, 1):
+            area[di:n + di, dj:n + dj] += quad / 4
+    return area.ravel()
+
+
+def _region(p: dict, lam, core: bool):
+    """(FEM plate, interface node pairs, grid key)."""
+    m, run, pairs, key = disc_mesh(p, lam, core)
+    if p["fem.integration"] == "selective":
+        raise CaseError("fem.integration = 'selective': a 90 ply couples normal and shear terms in 3D; "
+                        "allowed full or reduced")
+    C = np.array([lam.C(a) for a in lam.angles])[run]
+    region = FemRegion(m, ELEMENTS["hex8"], C, lam.ply["rho"], 1.0, p["fem.integration"], p["fem.formulation"],
+                       hourglass=p["fem.hourglass"], hourglass_kappa=p["fem.hourglass_kappa"])
+    return region, pairs, key
+
+
+def _supports(region: FemRegion, p: dict) -> list[PrescribedMotion]:
+    """Clamped rim, symmetry planes x = 0 and y = 0."""
+    X, R = region.X, 0.5 * p["geometry.span"]
+    rim = np.flatnonzero(np.hypot(X[:, 0], X[:, 1]) > R * (1 - 1e-9))
+    sym_x, sym_y = np.flatnonzero(X[:, 0] < 1e-9 * R), np.flatnonzero(X[:, 1] < 1e-9 * R)
+    return [PrescribedMotion(np.concatenate([3 * rim + k for k in range(3)])),
+            PrescribedMotion(3 * sym_x), PrescribedMotion(3 * sym_y + 1)]
+
+
+def _node_bonds(p: dict, lam, dyn: ExplicitDynamics, pairs: np.ndarray, area: np.ndarray) -> LawBonds | None:
+    """The far field's cohesive interfaces (None when its plies share nodes)."""
+    if len(pairs) == 0:
+        return None
+    itf, name = lam.interface, p[f"laminates.{p['geometry.laminate']}.interface"]
+    try:
+        law = HashinCohesiveLaw(K=itf["penalty"], Z0=itf["Z0"], R0=itf["R0"], GIc=itf["GIc"], GIIc=itf["GIIc"])
+    except ValueError as exc:
+        raise CaseError(f"interfaces.{name}.penalty = {itf['penalty']:g}: {exc}") from None
+    return cohesive_node_bonds(dyn, pairs, area, law, itf["friction"])
+
+
+def _rod(p: dict, name: str, H: float, penalty: float, rounding: float = 0.0) -> RigidImpactor:
+    """The quarter model's share of the rod, its face on the top surface at z = H."""
+    q = section(p, f"impactors.{name}")
+    mass = 0.25 * q["rho"] * np.pi * q["radius"] ** 2 * q["length"]
+    return RigidImpactor("rod", np.array([0.0, 0.0, H + 1e-9]), q["radius"], mass,
+                         np.array([0.0, 0.0, -q["velocity"]]), penalty, axis=np.array([0.0, 0.0, 1.0]),
+                         rounding=rounding)
+
+
+def disc(study, p: dict, mode: str, dem: str):
+    """(Simulation, Built) of the quarter disc in ``mode`` (fem or coupled)."""
+    built = body_of(p, mode)
+    lam, H = built.lam, built.lam.thickness
+    (support,) = study.layout.names["supports"]
+    if p[f"supports.{support}.condition"] != "clamped":
+        raise CaseError(f"supports.{support}.condition = {p[f'supports.{support}.condition']!r}: a disc is clamped "
+                        "at its rim; allowed: clamped")
+    (rod_name,) = study.layout.names["impactors"]
+    penalty = p[f"impactors.{rod_name}.penalty"]
+    if mode == "fem":
+        region, pairs, key = _region(p, lam, core=False)
+        area_by_key = tributary_area(p, core=False)
+        top = np.flatnonzero(np.abs(region.X[:, 2] - H) < 1e-9 * lam.ply_thickness)
+        rod = _rod(p, rod_name, H, penalty * float(np.median(area_by_key[key[top]])))
+        dyn = ExplicitDynamics(region, supports=_supports(region, p), impactors=[rod])
+        bonds = _node_bonds(p, lam, dyn, pairs, area_by_key[key[pairs[:, 0]]])
+        sim = fem_only(dyn, p, study.t_end, {})
+        built.dyn, built.fem_elements, built.impactors = dyn, region.n_elements, {rod_name: rod}
+    else:
+        block, scene, intra, inter, impactor = _particle_zone(p, built, rod_name, penalty)
+        area_by_key = tributary_area(p, core=True)
+        made = []
+
+        def make(extra_mass):
+            region, pairs, key = _region(p, lam, core=True)
+            dyn = ExplicitDynamics(region, supports=_supports(region, p), extra_mass=extra_mass)
+            made.append(_node_bonds(p, lam, dyn, pairs, area_by_key[key[pairs[:, 0]]]))
+            return dyn
+
+        sim, clock = coupled_simulation(p, make, scene, dem, study.t_end, models=(intra, inter, impactor))
+        bonds, backend = made[-1], clock.dem
+        i, j, _ = block.index.T
+        hold_symmetry_planes(backend, i, j, held=scene.groups["interface"])
+        built.lattice, built.intra, built.inter, built.backend = block, intra, inter, backend
+        built.column = np.maximum(i, j)  # the zone's edge: the largest
+        built.dyn, built.fem_elements, built.impactors = clock.fem, clock.fem.region.n_elements, {rod_name: impactor}
+        sim.counts.update({"law_bonds": len(intra.pairs)})
+    built.node_bonds = bonds
+    if bonds is not None:
+        sim.energies = energies_with(sim.energies, [bonds])
+    sim.counts.update({"interface_bonds": (len(bonds.pairs) if bonds is not None else 0)
+                       + (len(built.inter.pairs) if built.inter is not None else 0)})
+    return sim, built
+
+
+def _particle_zone(p: dict, built: Built, rod_name: str, penalty: float):
+    """(block, scene, intralaminar LawBonds, interlaminar LawBonds, the rod on the particles):
+    the square [0, a]^2 through the whole thickness; columns on x = 0, y = 0 (symmetry) and on
+    x = a, y = a (tied to the FEM) carry half cells."""
+    lam = built.lam
+    a, d, tp = p["zone.half_width"], p["zone.particle_size"], lam.ply_thickness
+    for key, length in (("laminates.*.ply_thickness", tp), ("zone.half_width", a)):
+        if abs(length / d - round(length / d)) > 1e-6:
+            raise CaseError(f"zone.particle_size = {d:g}: must divide {key} = {length:g} m")
+    r = p[f"impactors.{rod_name}.radius"]
+    top = min(2 * r, 0.25 * p["geometry.span"])
+    if not top >= a > r + 2 * d:
+        raise CaseError(f"zone.half_width = {a:g}: allowed above the rod radius + 2 particles ({r + 2 * d:g} m) and "
+                        f"up to twice the rod radius or half the plate radius ({top:g} m)")
+    N, rows = int(round(a / d)) + 1, [int(round(n * tp / d)) for n in lam.plies]
+    names = section(p, f"laminates.{p['geometry.laminate']}")
+    try:
+        block = ply_block.build((0.0, 0.0, 0.0), (N, N), rows, lam.angles, d, lam.material(),
+                                half_planes=[(0, 0), (1, 0), (0, N - 1), (1, N - 1)])
+    except ValueError as exc:
+        raise CaseError(f"materials.{names['material']}.G12 = {lam.ply['G12']:g}: {exc}") from None
+    l = block.x[block.intra_pairs[:, 1]] - block.x[block.intra_pairs[:, 0]]
+    intra = LawBonds(block.intra_pairs, block.x, l, block.intra_area, block.intra_law, volume=block.volume,
+                     label="intralaminar")
+    itf = lam.interface
+    try:
+        law = ply_block.interlaminar_law(block, itf["Z0"], itf["R0"], itf["GIc"], itf["GIIc"])
+    except ValueError as exc:
+        raise CaseError(f"interfaces.{names['interface']}.GIc = {itf['GIc']:g}: on the particle lattice (K = E22 / d "
+                        f"= {block.inter_K:.3g} Pa/m) {exc}") from None
+    inter = LawBonds(block.inter_pairs, block.x, np.tile([0.0, 0.0, 1.0], (len(block.inter_pairs), 1)),
+                     block.inter_area, law, friction=itf["friction"], along=block.inter_along, label="interlaminar")
+    i, j, k = block.index.T
+    scene = ply_block.engine_scene(block, groups={"interface": np.flatnonzero((i == N - 1) | (j == N - 1))})
+    # the rod grown by the particle radius meets the particle centres (rounded edge: a particle
+    # beside the rod is pushed aside, not found deep under the face)
+    rod = _rod(p, rod_name, lam.thickness, penalty * d**2, rounding=block.radius)
+    return block, scene, intra, inter, ParticleImpactor(rod, np.flatnonzero(k >= k.max() - 1), fixed=(True, True, False))
