@@ -106,6 +106,36 @@ def read(path: str | Path) -> skfem.Mesh:
     return skfem.Mesh.load(str(path))
 
 
+def read_gmsh(path: str | Path, part: str) -> tuple[skfem.Mesh, dict[str, np.ndarray]]:
+    """The elements of physical group ``part`` of a Gmsh mesh (2D quadrangles or triangles,
+    or 3D hexahedra or tetrahedra: the part's highest dimension) as a scikit-fem mesh, and
+    every physical group's node coordinates {name: (k, dim)} (for supports and loads named in
+    the file). ValueError (what is wrong, what the file holds) if the part is missing."""
+    import meshio
+    m = meshio.read(str(path))
+    kinds = {"quad": skfem.MeshQuad1, "triangle": skfem.MeshTri1, "hexahedron": skfem.MeshHex1,
+             "tetra": skfem.MeshTet1}
+    groups = {k: v for k, v in m.cell_sets.items() if not k.startswith("gmsh:")}
+    if part not in groups:
+        raise ValueError(f"no physical group {part!r}; the file names {', '.join(sorted(groups)) or 'none'}")
+    blocks = [(c.type, c.data[ids]) for c, ids in zip(m.cells, groups[part]) if len(ids) and c.type in kinds]
+    types = {t for t, _ in blocks}
+    if not blocks or len(types) > 1:
+        raise ValueError(f"physical group {part!r} must hold one element type of {', '.join(kinds)}; it holds "
+                         f"{', '.join(sorted(types)) or 'none of them'}")
+    (kind,) = types
+    cells = np.vstack([b for _, b in blocks]).astype(np.int64)
+    dim = 3 if kind in ("hexahedron", "tetra") else 2
+    used = np.unique(cells)
+    renumber = np.full(len(m.points), -1)
+    renumber[used] = np.arange(used.size)
+    mesh = kinds[kind](np.ascontiguousarray(m.points[used, :dim].T), np.ascontiguousarray(renumber[cells].T))
+    nodes = {name: m.points[np.unique(np.concatenate([c.data[ids].ravel() for c, ids in zip(m.cells, sets)
+                                                      if len(ids)] or [np.zeros(0, int)])).astype(int), :dim]
+             for name, sets in groups.items()}
+    return mesh, nodes
+
+
 def element_name(mesh: skfem.Mesh) -> str:
     """The ElementType name matching a scikit-fem mesh."""
     for name, e in ELEMENTS.items():

@@ -317,3 +317,51 @@ def test_the_3d_beam_holds_its_bracket_over_its_impacts(femdem, radius, velocity
                           f"--set=clock.t_end={0.2e-3 * np.sqrt(mass / 0.617)}")
     assert code == 0, err
     assert_checks(s)
+
+
+GMSH = ROOT / "tests" / "studies" / "gmsh_beam.toml"
+
+
+def _file_elements(x0: float) -> int:
+    """Quadrangles of the Gmsh file's laminate group right of x0 (read here with meshio alone)."""
+    import meshio
+    m = meshio.read(ROOT / "tests" / "studies" / "gmsh_beam.msh")
+    quads = np.vstack([c.data[ids] for c, ids in zip(m.cells, m.cell_sets["crossply"]) if c.type == "quad"])
+    return int(np.sum(m.points[quads, 0].min(axis=1) >= x0 - 1e-12))
+
+
+@pytest.mark.parametrize("mode, dem", [("fem", None), *[("coupled", e) for e in ENGINES], ("dem", "liggghts")])
+def test_a_gmsh_meshed_study_runs_everywhere(femdem, mode, dem):
+    """The three-point bend with its far field meshed by Gmsh (physical groups name the laminate
+    and the support): every mode, the coupled one on every engine, against the same closed form;
+    the FEM is the file's elements (right of the zone's edge when coupled)."""
+    code, s, err = femdem("run", str(GMSH), "--mode", mode, *(["--dem", dem] if dem else []))
+    assert code == 0, err
+    assert_checks(s)
+    want = {"fem": _file_elements(0.0), "coupled": _file_elements(6e-3), "dem": 0}[mode]
+    assert s["counts"].get("fem_elements", 0) == want
+
+
+def test_the_gmsh_beam_answers_as_the_structured_beam(femdem):
+    """All-FEM, the same beam meshed by Gmsh and by the structured generator: peak deflections
+    within 3 % (two meshes of one beam)."""
+    peaks = []
+    for path in (GMSH, BEND):
+        code, s, err = femdem("run", str(path), "--mode", "fem")
+        assert code == 0, err
+        peaks.append(s["qoi"]["peak_deflection"])
+    assert abs(peaks[0] / peaks[1] - 1) < 0.03, peaks
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--mode", "coupled", "--set=zone.half_width=8e-3"], ["mesh.file", "cross x = 0.008", "line"]),
+    (["--mode", "fem", "--set=geometry.span=50e-3"], ["mesh.file", "spans x", "allowed"]),
+    (["--mode", "fem", "--set=laminates.crossply.ply_thickness=0.25e-3"], ["mesh.file", "spans"]),
+    (["--mode", "fem", "--set=mesh.file=nowhere.msh"], ["mesh.file", "nowhere.msh", "no such file"]),
+    (["--mode", "fem", "--set=mesh.elements_along=4"], ["mesh.elements_along", "unknown key"]),
+])
+def test_a_mesh_file_that_does_not_fit_is_refused(femdem, args, words):
+    code, s, err = femdem("run", str(GMSH), *args)
+    assert code == 2 and s is None and err.count("\n") == 1, err
+    for w in words:
+        assert w in err, err

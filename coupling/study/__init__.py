@@ -7,12 +7,14 @@ treats both alike.
 """
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 from ..params import CaseError
 from . import closed_forms, fields, probes
 from .assemble import beam, plate
-from .bonded import bonded_beam, resolve_files
+from .bonded import bonded_beam
 from .disc import disc
 from .schema import BONDED, LAMINATED, MODES, document, parameters
 
@@ -101,6 +103,16 @@ class Study:
                 raise CaseError(f"[{table}.{next(iter(names[table]))}]: geometry.shape = {shape!r} takes none")
         if shape in ("beam", "bonded_beam"):
             refuse.append(("mesh", "elements_width"))
+        if shape != "beam":
+            if given("mesh", "file"):
+                raise CaseError(f"mesh.file: read for geometry.shape = 'beam' only so far; allowed for {shape!r}: "
+                                "leave it out")
+            refuse.append(("mesh", "file"))
+        elif given("mesh", "file"):
+            for key in ("elements_along", "element_ratio"):
+                if given("mesh", key):
+                    raise CaseError(f"mesh.{key}: has no effect with mesh.file; allowed: leave it out")
+                P.pop(f"mesh.{key}", None)
         for table, key in refuse:  # not this shape's: not listed, not settable
             P.pop(f"{table}.{key}", None)
         if shape in BONDED:
@@ -124,8 +136,8 @@ class Study:
                                     f"so far (issue #24); allowed for geometry.shape = {shape!r}: 'tied'")
 
     def resolve_files(self, p: dict, folder) -> None:
-        """Files a study reads (load curves), relative to its case file's folder."""
-        resolve_files(p, self.layout.names["loads"], folder)
+        """Files a study reads (load curves, a mesh), relative to its case file's folder."""
+        resolve_files(p, [f"loads.{n}.file" for n in self.layout.names["loads"]] + ["mesh.file"], folder)
 
     def no_fracture_history(self, p: dict) -> dict:
         """The history of this study's all-FEM twin (no fracture), run once per parameter set:
@@ -269,3 +281,15 @@ def _renamed_bonded(key: str, study: Study) -> str | None:
         kinds = [n for n, k in names["probes"].items() if k == "flexural_cracks"]
         return f"probes.{kinds[0]}.visible_opening" if kinds else None
     return None
+
+
+def resolve_files(p: dict, keys, folder: Path) -> None:
+    """Files (the keys' values) relative to the case file's folder, made absolute; refused if
+    missing."""
+    for key in keys:
+        if p.get(key):
+            path = Path(p[key]).expanduser()
+            path = path if path.is_absolute() else folder / path
+            if not path.is_file():
+                raise CaseError(f"{key} = {p[key]!r}: no such file (a relative path is read from {folder})")
+            p[key] = str(path)

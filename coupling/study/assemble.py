@@ -145,6 +145,7 @@ class Built:
     load_probes: dict = field(default_factory=dict)
     fibre_stiffness: np.ndarray | None = None
     edge_intra: bool = False
+    mesh_groups: dict = field(default_factory=dict)  # a mesh file's physical groups: name -> node coordinates
     node_bonds: LawBonds | None = None  # a cohesive far field's node-pair bonds (study/disc.py)
 
 
@@ -210,8 +211,8 @@ def beam(study, p: dict, mode: str, dem: str):
     else:
         def make(extra_mass):
             region = (_fem_block if dim == 3 else _fem_region)(p, built, lat.x[:, 0].max())
-            return ExplicitDynamics(region, supports=_fem_supports(study, p, region, L, dim, symmetry_x=False),
-                                    extra_mass=extra_mass)
+            return ExplicitDynamics(region, supports=_fem_supports(study, p, region, L, dim, symmetry_x=False,
+                                                                   groups=built.mesh_groups), extra_mass=extra_mass)
         sim, clock = coupled_simulation(p, make, scene, dem, t_end, models=models)
         backend, built.dyn = clock.dem, clock.fem
         built.fem_elements = clock.fem.region.n_elements
@@ -235,17 +236,25 @@ def _support(study, p: dict) -> str:
     return p[f"supports.{names[0]}.condition"]
 
 
-def _fem_supports(study, p: dict, region, L: float, dim: int, symmetry_x: bool) -> list[PrescribedMotion]:
+def _fem_supports(study, p: dict, region, L: float, dim: int, symmetry_x: bool,
+                  groups: dict | None = None) -> list[PrescribedMotion]:
     """The supports at x = span / 2 (clamped: every DOF of the end face; simply supported: the
-    vertical DOF of its bottom edge), the symmetry plane y = 0 (3D) and, when the FEM reaches
-    it, x = 0."""
+    vertical DOF of its bottom edge; or, when the mesh file has a physical group named as the
+    support, its nodes), the symmetry plane y = 0 (3D) and, when the FEM reaches it, x = 0."""
     X = region.X
-    end = np.flatnonzero(np.abs(X[:, 0] - L) < 1e-9 * L)
-    if _support(study, p) == "clamped":
-        out = [PrescribedMotion(np.concatenate([dim * end + c for c in range(dim)]))]
+    (name,) = study.layout.names["supports"]
+    clamped = _support(study, p) == "clamped"
+    if groups and name in groups:  # the mesh file names the support's nodes
+        dist = np.linalg.norm(X[:, None, :] - groups[name][None, :, :dim], axis=2)
+        held = np.flatnonzero(dist.min(axis=1) < 1e-9 * L)
     else:
-        bottom = end[X[end, dim - 1] < 1e-9 * L]
-        out = [PrescribedMotion(dim * bottom + dim - 1)]
+        held = np.flatnonzero(np.abs(X[:, 0] - L) < 1e-9 * L)
+        if not clamped:
+            held = held[X[held, dim - 1] < 1e-9 * L]
+    if clamped:
+        out = [PrescribedMotion(np.concatenate([dim * held + c for c in range(dim)]))]
+    else:
+        out = [PrescribedMotion(dim * held + dim - 1)]
     if dim == 3:
         out.append(PrescribedMotion(3 * np.flatnonzero(np.abs(X[:, 1]) < 1e-9 * L) + 1))
     if symmetry_x:
@@ -254,7 +263,10 @@ def _fem_supports(study, p: dict, region, L: float, dim: int, symmetry_x: bool) 
 
 
 def _fem_region(p: dict, built: Built, x0: float):
-    """FEM laminate on [x0, span / 2] x [0, H], one element row per particle row, graded from x0."""
+    """FEM laminate on [x0, span / 2] x [0, H], one element row per particle row, graded from x0
+    (or the mesh.file's part right of x0)."""
+    if p["mesh.file"]:
+        return _file_region(p, built, x0)
     lam, k = built.lam, p["zone.plies_per_particle"]
     n = p["mesh.elements_along"]
     ratio = p["mesh.element_ratio"] ** (1.0 / max(n - 1, 1))
@@ -265,6 +277,44 @@ def _fem_region(p: dict, built: Built, x0: float):
     run = np.searchsorted(np.cumsum(lam.plies) * lam.ply_thickness, cy)
     D = np.array([lam.D(lam.angles[b]) for b in run])
     return make_region(m, p, D, lam.ply["rho"], built.t)
+
+
+def _file_region(p: dict, built: Built, x0: float):
+    """The FEM laminate from a Gmsh file: the elements of its physical group named after the
+    laminate that lie right of x0 (the file needs a mesh line there), each in one ply run (the
+    file needs lines at the runs' interfaces); its physical groups' nodes kept for the supports."""
+    lam, L = built.lam, built.half_span
+    try:
+        m, built.mesh_groups = mesh.read_gmsh(p["mesh.file"], p["geometry.laminate"])
+    except (OSError, ValueError) as exc:
+        raise CaseError(f"mesh.file = {p['mesh.file']!r}: {exc}") from None
+    tol = 1e-6 * min(lam.ply_thickness, built.t)
+    X, where = m.p, f"mesh.file = {p['mesh.file']!r}"
+    if m.dim() != 2:
+        raise CaseError(f"{where}: a beam slice takes a 2D mesh; this one is {m.dim()}D")
+    x = X[0, m.t]
+    if x0 > 0:
+        left, right = x.max(axis=0) <= x0 + tol, x.min(axis=0) >= x0 - tol
+        if not (left | right).all():
+            raise CaseError(f"{where}: elements cross x = {x0:g} m, the zone's edge; allowed: a mesh with a line "
+                            "there (zone.half_width rounded to whole particle spacings)")
+        m = m.remove_elements(np.flatnonzero(left))
+        X = m.p
+    span = (X[0].min(), X[0].max(), X[1].min(), X[1].max())
+    want = (x0, L, 0.0, lam.thickness)
+    if any(abs(a - b) > tol for a, b in zip(span, want)):
+        raise CaseError(f"{where}: spans x {span[0]:g}..{span[1]:g}, y {span[2]:g}..{span[3]:g} m; allowed: the "
+                        f"half beam x {want[0]:g}..{want[1]:g} (from the zone's edge in coupled mode), y 0.."
+                        f"{want[3]:g} m")
+    levels = np.cumsum(lam.plies) * lam.ply_thickness
+    y = X[1, m.t]
+    run = np.searchsorted(levels, y.mean(axis=0))
+    bottom = np.concatenate([[0.0], levels])[run]
+    bad = (y.min(axis=0) < bottom - tol) | (y.max(axis=0) > levels[run] + tol)
+    if bad.any():
+        raise CaseError(f"{where}: {int(bad.sum())} elements cross a ply run's interface (y = "
+                        f"{', '.join(f'{v:g}' for v in levels[:-1])} m); allowed: a mesh with lines there")
+    return make_region(m, p, np.array([lam.D(lam.angles[r]) for r in run]), lam.ply["rho"], built.t)
 
 
 def _fem_block(p: dict, built: Built, x0: float):
@@ -304,8 +354,8 @@ def _fem_beam(study, p: dict, built: Built, t_end: float):
             imps[name] = RigidImpactor("cylinder", np.array([0.0, H + q["radius"] + 1e-9]), q["radius"],
                                        0.5 * q["mass_per_width"] * d, np.array([0.0, -q["velocity"]]), k_pen,
                                        friction=q["friction"])
-    dyn = ExplicitDynamics(region, supports=_fem_supports(study, p, region, L, dim, symmetry_x=True),
-                           impactors=list(imps.values()))
+    dyn = ExplicitDynamics(region, supports=_fem_supports(study, p, region, L, dim, symmetry_x=True,
+                                                          groups=built.mesh_groups), impactors=list(imps.values()))
     built.dyn, built.impactors, built.fem_elements = dyn, imps, region.n_elements
     return fem_only(dyn, p, t_end, {})
 

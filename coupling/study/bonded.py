@@ -29,7 +29,6 @@ held vertically (in all-DEM, the support column's sheet and bottom body particle
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
@@ -140,18 +139,6 @@ def load_curve(p: dict, name: str):
         f = lambda s: float(np.interp(s, t, F, left=0.0, right=0.0))
     k = q["scale"]
     return lambda s: k * f(s)
-
-
-def resolve_files(p: dict, names, folder: Path) -> None:
-    """Load files relative to the case file's folder, made absolute; refused if unreadable."""
-    for name in names:
-        key = f"loads.{name}.file"
-        if p.get(key):
-            path = Path(p[key]).expanduser()
-            path = path if path.is_absolute() else folder / path
-            if not path.is_file():
-                raise CaseError(f"{key} = {p[key]!r}: no such file (a relative path is read from {folder})")
-            p[key] = str(path)
 
 
 # -- the assembly --------------------------------------------------------------------------------

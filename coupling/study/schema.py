@@ -211,6 +211,11 @@ SECTIONS: dict[str, dict[str, Param]] = {
         "elements_along": Param(30, "FEM elements between the zone and a support (a disc: along its radius, a "
                                 "multiple of 8 puts a node ring on the rod's edge)", kind="int", low=2),
         "elements_per_ply": Param(1, "a disc's: Hex8 elements through each ply", kind="int", low=1, high=8),
+        "file": Param("", "a Gmsh mesh (.msh, read by meshio) of a beam slice's half, x from 0 to span / 2, y "
+                      "through the thickness: its physical group named after the laminate is the FEM (quadrangles or "
+                      "triangles, lines at the ply runs' interfaces and at the zone's edge); a physical group named "
+                      "after the [supports.*] table holds that support's nodes; relative to the case file; "
+                      "replaces elements_along and element_ratio", kind="str"),
         "element_ratio": Param(6.0, "largest / smallest element length, graded from the zone", low=1.0, high=100.0),
         "elements_width": Param(4, "Hex8 elements across the modelled half width (beam_3d, bonded_beam_3d), or "
                                 "across the zone's half width (plate)", kind="int", low=1, high=200),
