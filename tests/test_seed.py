@@ -1,5 +1,8 @@
 """The seed paper's examples (issue 9): coarse variants with their checks, and the coupled
 model against its standalone references when nothing breaks."""
+import tomllib
+from pathlib import Path
+
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, Phase, given, settings
@@ -9,6 +12,8 @@ from hypothesis import strategies as st
 DEM = {"fem": [], "coupled": ["--dem", "liggghts"], "dem": ["--dem", "liggghts"]}
 
 from conftest import assert_checks
+
+ROOT = Path(__file__).resolve().parents[1]
 
 # every strength and toughness out of reach: the same beam, elastic
 ELASTIC = [f"--set=materials.graphite_epoxy.{k}=1e11" for k in ("Xt", "Xc", "Yt", "Yc", "S12", "S23")] + \
@@ -238,6 +243,47 @@ def test_rod_impact_coarse_fem_and_coupled(femdem):
         assert 0.0 <= q[mode]["debonded_area"] <= q[mode]["damaged_area"] <= 3.1416 * 0.12**2 * 1.0001
     for key in ("peak_plate_deflection", "peak_layer_separation", "debonded_area"):
         assert abs(q["coupled"][key] / q["fem"][key] - 1) < 0.10, (key, q)
+
+
+ROD_RANGES = tomllib.loads((ROOT / "cases" / "seed" / "rod_impact_coarse.toml").read_text())["ranges"]
+_rod_draw = {k.replace(".", "_"): st.floats(*v) for k, v in ROD_RANGES.items()}
+
+
+def _rod_run(femdem, values: dict, mode: str, dem: str = ""):
+    d = 3e-3  # the case's particle size: the zone's half width up to twice the rod radius, whole spacings
+    zone = [f"--set=zone.half_width={d * np.floor(2 * values['impactors.rod.radius'] / d + 1e-9)!r}"]
+    return femdem("run", "rod_impact_coarse", "--mode", mode, *(["--dem", dem] if dem else []),
+                  *[f"--set={k}={v!r}" for k, v in values.items()], *(zone if mode == "coupled" else []))
+
+
+@settings(max_examples=2, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.generate],
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(**_rod_draw)
+def test_rod_impact_holds_its_closed_form_over_its_ranges(femdem, **draw):
+    """Seed 5.3 all-FEM over the ply moduli and thickness, the plate's diameter and the rod's
+    radius, length and speed (the case's [ranges]): the peak deflection within 35 % of the
+    bending + shear spring-mass estimate, the ledger closed (issue #22)."""
+    values = {k: draw[k.replace(".", "_")] for k in ROD_RANGES}
+    code, s, err = _rod_run(femdem, values, "fem")
+    assert code == 0, err
+    assert_checks(s)
+
+
+@pytest.mark.slow
+@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(dem=st.sampled_from(["liggghts", "lammps", "yade"]), **_rod_draw)
+def test_rod_impact_coupled_holds_its_closed_form_over_its_ranges(femdem, dem, **draw):
+    """The same draws coupled (the particle zone under the rod, as wide as twice its radius), on
+    the three engines: the check holds and the coupled plate deflects as the all-FEM one
+    within 10 %."""
+    values = {k: draw[k.replace(".", "_")] for k in ROD_RANGES}
+    peaks = {}
+    for mode in ("fem", "coupled"):
+        code, s, err = _rod_run(femdem, values, mode, dem if mode == "coupled" else "")
+        assert code == 0, err
+        assert_checks(s)
+        peaks[mode] = s["qoi"]["peak_plate_deflection"]
+    assert abs(peaks["coupled"] / peaks["fem"] - 1) < 0.10, (values, peaks)
 
 
 def test_rod_impact_bad_settings_are_caught(femdem):
