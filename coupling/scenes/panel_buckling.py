@@ -69,7 +69,7 @@ from fem_region.explicit import ExplicitDynamics, PrescribedMotion
 from fem_region.modal import lowest_modes
 
 from ..checks import bound, check, within
-from ..params import density, modulus, Param, particle_size, positive
+from ..params import density, modulus, Param, positive
 from . import delamination as dl
 from ..participants.fem import FEM_OPTIONS, FemNodes, fem_only, make_region
 from ..participants.coupled import COUPLING, coupled_simulation
@@ -114,10 +114,13 @@ PARAMETERS = {
                                            low=0.0, high=50.0),
     "interface.friction": Param(0.0, "Coulomb friction of the delaminated faces in the DEM windows", low=0.0,
                                 high=2.0),
-    "zone.particle_size": particle_size(0.254e-3, "DEM particle size d (coupled mode; the lattice spacing)"),
-    "zone.window_ahead": positive(16e-3, "DEM window ahead of each tip, into the intact laminate (room to grow; "
-                                 "the default leaves 3 mm to the clamps: with Table 1's toughness the delamination "
-                                 "runs from the limit load through a 14 mm window)", "m"),
+    "zone.particle_size": Param(0.0, "DEM particle size d (coupled mode; the lattice spacing); 0: two plies, or "
+                                "half the thinner sublaminate if less (the band's four rows fit)", unit="m",
+                                low=0.0, plausible=(0.0, 1.0)),
+    "zone.window_ahead": Param(0.0, "DEM window ahead of each tip, into the intact laminate (room to grow); 0: the "
+                               "intact end less max(3 mm, a tenth of it), the room to the clamps (16 mm on the "
+                               "default panel: with Table 1's toughness the delamination runs from the limit load "
+                               "through a 14 mm window)", unit="m", low=0.0),
     # behind the tip the window holds the film's lower half as two particle rows: 2 mm of it
     # made the film's clamped ends 3 % softer (coupled elastic 5.75 kN against all-FEM 5.94 kN
     # on the coarse mesh; 0.5 mm: 5.94 against 5.97 kN)
@@ -284,7 +287,7 @@ def panel_region(p: dict, win: list):
     H, h = p["geometry.plies"] * tp, p["geometry.sublaminate_plies"] * tp
     yc, x1, x2 = H - h, 0.5 * (L - l), 0.5 * (L + l)
     dx = L / p["mesh.elements_along"]
-    d = p["zone.particle_size"]
+    d = particle_size(p)
     band = d if win else 0.0  # the windows' half-height cut out of the FEM
     xs = np.linspace(0, L, p["mesh.elements_along"] + 1)
     for xa, xb in win:  # the windows' own lines; none closer than half an element to their edges
@@ -325,15 +328,29 @@ def imperfect(p: dict, X: np.ndarray, upper: np.ndarray, x1: float, x2: float, H
     return pts
 
 
+def particle_size(p: dict) -> float:
+    """m, zone.particle_size, or (0) two plies, or half the thinner of the sublaminate and the
+    base when that is less (the band's four rows, 2 d across the plane, fit in both)."""
+    tp, n, n_sub = p["geometry.ply_thickness"], p["geometry.plies"], p["geometry.sublaminate_plies"]
+    return p["zone.particle_size"] or min(2 * tp, 0.5 * min(n_sub, n - n_sub) * tp)
+
+
+def window_ahead(p: dict) -> float:
+    """m, zone.window_ahead, or (0) the intact end x1 less max(3 mm, x1 / 10): the delamination may
+    run to the clamps' neighbourhood whatever its length."""
+    x1 = 0.5 * (p["geometry.length"] - p["geometry.delamination_length"])
+    return p["zone.window_ahead"] or x1 - max(3e-3, 0.1 * x1)
+
+
 def windows(p: dict, x1: float, x2: float, h: float, yc: float) -> list[tuple[float, float]]:
     """[(x_a, x_b)] m of the two DEM windows, whole particle spacings d, each tip on a column:
     zone.window_ahead into the intact laminate and zone.window_behind into the delamination."""
     from ..params import CaseError
-    d = p["zone.particle_size"]
+    d = particle_size(p)
     if 2 * d > h or 2 * d > yc:
         raise CaseError(f"zone.particle_size = {d:g}: the band (four rows, {2 * d:g} m across the plane) needs the "
                         f"sublaminate and the base thicker than it; allowed <= {min(h, yc) / 2:g} m")
-    n_out = max(2, int(round(p["zone.window_ahead"] / d)))
+    n_out = max(2, int(round(window_ahead(p) / d)))
     n_in = max(2, int(round(p["zone.window_behind"] / d)))
     if x1 - n_out * d < 0.1 * x1 or x1 + n_in * d >= 0.5 * (x1 + x2) - d:
         raise CaseError(f"zone.window_ahead = {p['zone.window_ahead']:g}, zone.window_behind = {p['zone.window_behind']:g}: "
@@ -349,7 +366,7 @@ def window_scene(p: dict, win, D: np.ndarray, x1: float, x2: float, yc: float, H
     tips turn with the panel's bow by more than the film's critical strain)."""
     from dem_region.ply_lattice import lattice_stiffness, slice_moduli
     from dem_region.scene import DemScene
-    r, b, rho = 0.5 * p["zone.particle_size"], p["geometry.width"], p["material.rho"]
+    r, b, rho = 0.5 * particle_size(p), p["geometry.width"], p["material.rho"]
     d = 2 * r
     E_x, E_y, G = slice_moduli(D)
     K = E_y / d
@@ -548,7 +565,7 @@ def growth(p: dict, h: dict, P: np.ndarray, eps_film: float) -> dict:
     for a film buckled at its measured critical strain with the B-K toughness of that mix."""
     E, b = p["material.E11"], p["geometry.width"]
     H, h_sub = p["geometry.plies"] * p["geometry.ply_thickness"], p["geometry.sublaminate_plies"] * p["geometry.ply_thickness"]
-    l, d = p["geometry.delamination_length"], p["zone.particle_size"]
+    l, d = p["geometry.delamination_length"], particle_size(p)
     gl, gr = np.asarray(h["growth_left"]), np.asarray(h["growth_right"])
     k = int(np.argmax(P))
     grown = np.flatnonzero(np.maximum(gl, gr) >= 2 * d - 1e-9 * d)
@@ -563,7 +580,7 @@ def growth(p: dict, h: dict, P: np.ndarray, eps_film: float) -> dict:
            "interface_dissipated": float(np.asarray(h["interface_dissipated"])[-1])}
     # the window's last column is tied to intact FEM: a tip can run (n_out - 1) spacings; the
     # intact end left beyond that, from the clamp
-    room = (int(round(p["zone.window_ahead"] / d)) - 1) * d
+    room = (int(round(window_ahead(p) / d)) - 1) * d
     out["growth_room"] = room
     out["growth_reached_window_edge"] = float(max(gl.max(), gr.max()) >= room - 1e-9 * d)
     out["intact_end_beyond_window"] = float(0.5 * (p["geometry.length"] - l) - room - d)
