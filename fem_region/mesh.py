@@ -106,6 +106,24 @@ def read(path: str | Path) -> skfem.Mesh:
     return skfem.Mesh.load(str(path))
 
 
+def split_interfaces(p: np.ndarray, t: np.ndarray, run: np.ndarray, levels, axis: int,
+                     tol: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Cohesive interfaces in a mesh: the nodes on each plane ``p[axis] = level`` (levels bottom
+    up) doubled, the elements of the runs above it (``run`` (nel,) > k) switched to the twins.
+    p (dim, n) m, t (nodes, nel); returns (p, t, pairs (k, 2) lower / upper node), the twins
+    appended after the nodes in their order."""
+    p, t, pairs = p.copy(), t.copy(), []
+    for k, level in enumerate(levels):
+        on = np.flatnonzero(np.abs(p[axis] - level) < tol)
+        twin = np.arange(p.shape[1])
+        twin[on] = p.shape[1] + np.arange(on.size)
+        p = np.hstack([p, p[:, on]])
+        above = run > k
+        t[:, above] = twin[t[:, above]]
+        pairs.append(np.column_stack([on, twin[on]]))
+    return p, t, np.vstack(pairs) if pairs else np.zeros((0, 2), int)
+
+
 def read_gmsh(path: str | Path, part: str) -> tuple[skfem.Mesh, dict[str, np.ndarray]]:
     """The elements of physical group ``part`` of a Gmsh mesh (2D quadrangles or triangles,
     or 3D hexahedra or tetrahedra: the part's highest dimension) as a scikit-fem mesh, and

@@ -28,11 +28,12 @@ from fem_region.explicit import ExplicitDynamics, PrescribedMotion
 from physics.failure import HoffmanStrengths
 from physics.impactor import RigidImpactor
 from physics.law_bonds import LawBonds
+from physics.laws import HashinCohesiveLaw
 
 from ..params import CaseError
 from ..participants.coupled import coupled_simulation
 from ..participants.dem import dem_only, hold_symmetry_planes
-from ..participants.fem import fem_only, make_region
+from ..participants.fem import cohesive_node_bonds, energies_with, fem_only, make_region
 from .schema import section
 
 
@@ -146,13 +147,18 @@ class Built:
     fibre_stiffness: np.ndarray | None = None
     edge_intra: bool = False
     mesh_groups: dict = field(default_factory=dict)  # a mesh file's physical groups: name -> node coordinates
-    node_bonds: LawBonds | None = None  # a cohesive far field's node-pair bonds (study/disc.py)
+    node_bonds: LawBonds | None = None  # a cohesive far field's node-pair bonds
+    fem_pairs: np.ndarray | None = None  # (k, 2) the FEM's doubled nodes, lower / upper
 
 
 def body_of(p: dict, mode: str) -> Built:
     """The body's laminate and particle size, before its participants exist."""
     lam = laminate(p, p["geometry.laminate"])
     lam.elastic = not p["zone.ply_failure"]
+    key = f"laminates.{p['geometry.laminate']}.far_field_interfaces"
+    if p[key] == "cohesive" and p["geometry.shape"] not in ("beam", "disc"):
+        raise CaseError(f"{key} = 'cohesive': built for the beam slice and the disc so far (issue #24); allowed for "
+                        f"geometry.shape = {p['geometry.shape']!r}: 'tied'")
     if p["geometry.shape"] == "disc":
         return Built(p, mode, lam, 0.5 * p["geometry.span"], p["zone.particle_size"], 4.0, dim=3)  # a quarter
     k = p["zone.plies_per_particle"]
@@ -211,11 +217,15 @@ def beam(study, p: dict, mode: str, dem: str):
     else:
         def make(extra_mass):
             region = (_fem_block if dim == 3 else _fem_region)(p, built, lat.x[:, 0].max())
-            return ExplicitDynamics(region, supports=_fem_supports(study, p, region, L, dim, symmetry_x=False,
-                                                                   groups=built.mesh_groups), extra_mass=extra_mass)
+            dyn = ExplicitDynamics(region, supports=_fem_supports(study, p, region, L, dim, symmetry_x=False,
+                                                                  groups=built.mesh_groups), extra_mass=extra_mass)
+            built.node_bonds = _far_field_bonds(p, built, dyn)
+            return dyn
         sim, clock = coupled_simulation(p, make, scene, dem, t_end, models=models)
         backend, built.dyn = clock.dem, clock.fem
         built.fem_elements = clock.fem.region.n_elements
+        if built.node_bonds is not None:
+            sim.energies = energies_with(sim.energies, [built.node_bonds])
     built.backend = backend
     if dim == 3:
         held = np.concatenate([scene.groups.get("interface", []), scene.groups.get("fixed", [])]).astype(int)
@@ -275,6 +285,7 @@ def _fem_region(p: dict, built: Built, x0: float):
     m = mesh.rectangle(xs, ys, p["mesh.element"])
     cy = m.p[1, m.t].mean(axis=0)
     run = np.searchsorted(np.cumsum(lam.plies) * lam.ply_thickness, cy)
+    m = _split(p, built, m, run)
     D = np.array([lam.D(lam.angles[b]) for b in run])
     return make_region(m, p, D, lam.ply["rho"], built.t)
 
@@ -314,7 +325,20 @@ def _file_region(p: dict, built: Built, x0: float):
     if bad.any():
         raise CaseError(f"{where}: {int(bad.sum())} elements cross a ply run's interface (y = "
                         f"{', '.join(f'{v:g}' for v in levels[:-1])} m); allowed: a mesh with lines there")
+    m = _split(p, built, m, run)
     return make_region(m, p, np.array([lam.D(lam.angles[r]) for r in run]), lam.ply["rho"], built.t)
+
+
+def _split(p: dict, built: Built, m, run: np.ndarray):
+    """The slice's mesh with its ply runs' interfaces doubled when the far field is cohesive
+    (the pairs kept in built.fem_pairs), else as it is."""
+    lam = built.lam
+    if p[f"laminates.{p['geometry.laminate']}.far_field_interfaces"] != "cohesive":
+        built.fem_pairs = None
+        return m
+    levels = np.cumsum(lam.plies)[:-1] * lam.ply_thickness
+    P, T, built.fem_pairs = mesh.split_interfaces(m.p, m.t, run, levels, 1, 1e-9 * lam.ply_thickness)
+    return type(m)(np.ascontiguousarray(P), np.ascontiguousarray(T))
 
 
 def _fem_block(p: dict, built: Built, x0: float):
@@ -357,7 +381,42 @@ def _fem_beam(study, p: dict, built: Built, t_end: float):
     dyn = ExplicitDynamics(region, supports=_fem_supports(study, p, region, L, dim, symmetry_x=True,
                                                           groups=built.mesh_groups), impactors=list(imps.values()))
     built.dyn, built.impactors, built.fem_elements = dyn, imps, region.n_elements
-    return fem_only(dyn, p, t_end, {})
+    built.node_bonds = _far_field_bonds(p, built, dyn)
+    sim = fem_only(dyn, p, t_end, {})
+    if built.node_bonds is not None:
+        sim.energies = energies_with(sim.energies, [built.node_bonds])
+    return sim
+
+
+def _far_field_bonds(p: dict, built: Built, dyn: ExplicitDynamics) -> LawBonds | None:
+    """A slice's cohesive far field (laminates' far_field_interfaces = "cohesive"): the node
+    pairs the mesh doubled at the ply runs' interfaces, joined by the laminate's interface law
+    with its penalty (0: 50 x the plies' smallest transverse modulus over the particle size,
+    stiff against an element row as Turon et al. 2007 advise, or less where that would lower
+    the elements' stable step), each pair standing for its tributary length along x times the
+    slice's thickness; None with tied plies."""
+    pairs = built.fem_pairs
+    if pairs is None or len(pairs) == 0:
+        return None
+    lam, name = built.lam, p[f"laminates.{p['geometry.laminate']}.interface"]
+    itf, X = lam.interface, dyn.region.X
+    area = np.zeros(len(pairs))
+    for level in np.unique(np.round(X[pairs[:, 0], 1], 12)):  # each interface: lengths between midpoints
+        on = np.flatnonzero(np.abs(X[pairs[:, 0], 1] - level) < 1e-9 * lam.thickness)
+        on = on[np.argsort(X[pairs[on, 0], 0])]
+        x = X[pairs[on, 0], 0]
+        mid = np.concatenate([[x[0]], 0.5 * (x[1:] + x[:-1]), [x[-1]]])
+        area[on] = np.diff(mid) * built.t
+    # as stiff as 50 E_y / d but no stiffer than the elements' own stable step allows (a node pair
+    # of masses m and stiffness k = K area is stable below sqrt(m / k))
+    dt_el = dyn.region.critical_dt(dyn.density_scale)
+    m_pair = np.minimum(dyn.m[pairs[:, 0]], dyn.m[pairs[:, 1]])
+    K = itf["penalty"] or min(50 * lam.transverse_modulus() / built.t, float(np.min(m_pair / area)) / dt_el**2)
+    try:
+        law = HashinCohesiveLaw(K=K, Z0=itf["Z0"], R0=itf["R0"], GIc=itf["GIc"], GIIc=itf["GIIc"])
+    except ValueError as exc:
+        raise CaseError(f"interfaces.{name}.penalty = {itf['penalty']:g}: {exc}") from None
+    return cohesive_node_bonds(dyn, pairs, area, law, itf["friction"])
 
 
 def _particle_zone(built: Built, x_end: float, tied: bool, clamped: bool):

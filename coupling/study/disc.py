@@ -75,21 +75,11 @@ def disc_mesh(p: dict, lam, core: bool):
     n, m, tp = p["mesh.elements_along"], p["mesh.elements_per_ply"], lam.ply_thickness
     g = np.linspace(0.0, 1.0, n + 1)
     box = mesh.box(g, g, np.linspace(0.0, lam.thickness, sum(lam.plies) * m + 1), "hex8")
-    P, T = box.p.copy(), box.t.copy()
-    tol = 1e-9 * tp
+    P, T = box.p, box.t
     levels = np.cumsum(lam.plies)[:-1] * tp  # interfaces between runs, bottom up
     run = np.searchsorted(levels, P[2, T].mean(axis=0))
-    pairs = []
-    if p[f"laminates.{p['geometry.laminate']}.far_field_interfaces"] == "cohesive":
-        for k, z in enumerate(levels):
-            on = np.flatnonzero(np.abs(P[2] - z) < tol)
-            twin = np.arange(P.shape[1])
-            twin[on] = P.shape[1] + np.arange(on.size)
-            P = np.hstack([P, P[:, on]])
-            above = run > k
-            T[:, above] = twin[T[:, above]]
-            pairs.append(np.column_stack([on, twin[on]]))
-    pairs = np.vstack(pairs) if pairs else np.zeros((0, 2), int)
+    cohesive = p[f"laminates.{p['geometry.laminate']}.far_field_interfaces"] == "cohesive"
+    P, T, pairs = mesh.split_interfaces(P, T, run, levels if cohesive else [], 2, 1e-9 * tp)
     u, v = P[0].copy(), P[1].copy()
     P[0], P[1] = _map(u, v, p, core)
     key = np.round(v * n) * (n + 1) + np.round(u * n)

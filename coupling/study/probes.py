@@ -60,22 +60,31 @@ def _contact_series(built, name, f):
 
 def _delamination_series(built, name, f):
     """Per ply interface k (bottom up), over the whole structure: debonded area (m^2), and the
-    debonded and damaged (d > 0) lengths, area / width (m). The tied or clamped column is not
-    counted (it is the FEM's face or the support)."""
-    if built.inter is None:
+    debonded and damaged (d > 0) lengths, area / width (m), of the zone's bonds and, with a
+    cohesive far field, the FEM's node pairs. The tied or clamped column is not counted (it is
+    the FEM's face or the support)."""
+    if built.lam is None or (built.inter is None and built.node_bonds is None):
         return {}
-    inter, W = built.inter, built.p["geometry.width"]
-    first = inter.pairs[:, 0]
-    layer = built.lattice.x[first, built.dim - 1]
-    area = built.width_factor * inter.area
-    if built.end_held:
-        area = np.where(built.column[first] == built.column.max(), 0.0, area)
+    W, up, lam = built.p["geometry.width"], built.dim - 1, built.lam
+    levels = np.cumsum(lam.plies)[:-1] * lam.ply_thickness  # the interfaces, bottom up
+    parts = []  # (bonds, area (whole structure), interface index of each bond)
+    if built.inter is not None:
+        inter, first = built.inter, built.inter.pairs[:, 0]
+        area = built.width_factor * inter.area
+        if built.end_held:
+            area = np.where(built.column[first] == built.column.max(), 0.0, area)
+        parts.append((inter, area, np.searchsorted(levels, built.lattice.x[first, up])))
+    if built.node_bonds is not None:
+        nb = built.node_bonds
+        z = built.dyn.region.X[nb.pairs[:, 0], up]
+        parts.append((nb, built.width_factor * nb.area, np.argmin(np.abs(z[:, None] - levels[None, :]), axis=1)))
     out = {}
-    for k, z in enumerate(np.unique(layer)):
-        sel = layer == z
-        out[f"{name}_area_{k}"] = lambda sel=sel: float(area[sel] @ inter.failed()[sel])
-        out[f"{name}_length_{k}"] = lambda sel=sel: float(area[sel] @ inter.failed()[sel]) / W
-        out[f"damaged_interface_length_{k}"] = lambda sel=sel: float(area[sel] @ (inter.damage[sel] > 0)) / W
+    for k in sorted(set(np.concatenate([idx for _, _, idx in parts]).tolist())):
+        sel = [(b, a, idx == k) for b, a, idx in parts]
+        debonded = lambda sel=sel: float(sum(a[s] @ b.failed()[s] for b, a, s in sel))
+        out[f"{name}_area_{k}"] = debonded
+        out[f"{name}_length_{k}"] = lambda debonded=debonded: debonded() / W
+        out[f"damaged_interface_length_{k}"] = lambda sel=sel: float(sum(a[s] @ (b.damage[s] > 0) for b, a, s in sel)) / W
     return out
 
 
