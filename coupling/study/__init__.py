@@ -226,7 +226,11 @@ def _far_field(built):
     edges = np.unique(np.sort(edges[along_axis], axis=1), axis=0).astype(float)
     dim = dyn.region.dim
     X0 = np.pad(X, ((0, 0), (0, 3 - dim)))
-    return lambda: {"fem_x": np.pad(X + dyn.state.u, ((0, 0), (0, 3 - dim))), "fem_x0": X0, "fem_edges": edges}
+    bonds = built.node_bonds  # a cohesive far field: its node pairs' damage, drawn as the particles' bonds
+    pairs = bonds.pairs[:, 0] if bonds is not None else np.zeros(0, int)
+    return lambda: {"fem_x": np.pad(X + dyn.state.u, ((0, 0), (0, 3 - dim))), "fem_x0": X0, "fem_edges": edges,
+                    "fem_bond_nodes": pairs.astype(float),
+                    "fem_bond_damage": bonds.damage.copy() if bonds is not None else np.zeros(0)}
 
 
 def document_schema() -> str:

@@ -78,12 +78,14 @@ def damage(h: dict, plots_dir) -> None:
             sections = [(np.ones(len(x), bool), [0, 1], "", None)]
         wide = 12 if fem is None else 16
         legend = (": adhesive (blue) and cracks in the body (orange), darker = more damaged" if f"{name}.bonded" in h
-                  else ": interlaminar (blue) and intralaminar (red: 90 plies, orange: 0 plies), darker = more damaged")
+                  else ": interlaminar (blue, particles and FEM node pairs) and intralaminar (red: 90 plies, "
+                  "orange: 0 plies), darker = more damaged")
         fig, axes = plt.subplots(len(sections), 1, figsize=(wide, 3.2 * len(sections)), squeeze=False)
         for ax, (on, cols, label, plane) in zip(axes[:, 0], sections):
             if fem is not None:
-                _far_field(ax, fem, 1e3 * np.asarray(h[f"{name}.fem_x0"]), np.asarray(h[f"{name}.fem_edges"]).astype(int),
-                           cols, plane)
+                fem0 = 1e3 * np.asarray(h[f"{name}.fem_x0"])
+                _far_field(ax, fem, fem0, np.asarray(h[f"{name}.fem_edges"]).astype(int), cols, plane)
+                _far_field_bonds(ax, h, name, fem, fem0, cols, plane)
             _section(ax, h, name, x, in_90, on, cols)
             ax.set(xlabel="x (mm)", ylabel=f"{'yz'[cols[1] - 1]} (mm)",
                    title=f"damage at {name.split('_')[1]}" + (f", {label}" if label else legend)
@@ -105,6 +107,27 @@ def _far_field(ax, fem, fem0, edges, cols, plane) -> None:
         edges = edges[on[edges].all(axis=1)]
     ax.add_collection(LineCollection(fem[edges][:, :, cols], colors="0.75", linewidths=0.5))
     ax.autoscale()
+
+
+def _far_field_bonds(ax, h, name, fem, fem0, cols, plane) -> None:
+    """A cohesive far field's damaged node pairs (blues, as the zone's interlaminar bonds): a short
+    tick across the interface at each pair; in 3D those in the section's node plane."""
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import LineCollection
+    key = f"{name}.fem_bond_nodes"
+    if key not in h or not len(h[key]):
+        return
+    nodes, dmg = np.asarray(h[key]).astype(int), np.asarray(h[f"{name}.fem_bond_damage"])
+    hit = dmg > 0.05
+    if plane is not None:
+        ys = np.unique(fem0[:, 1])
+        hit &= np.abs(fem0[nodes, 1] - ys[np.argmin(np.abs(ys - plane))]) <= 1e-9 * max(np.ptp(fem0), 1.0)
+    if not hit.any():
+        return
+    p = fem[nodes[hit]][:, cols]
+    tick = 0.25 * np.ptp(fem0[:, cols[1]]) / max(8, len(np.unique(fem0[:, cols[1]])))
+    segs = np.stack([p - [0, tick], p + [0, tick]], axis=1)
+    ax.add_collection(LineCollection(segs, colors=plt.cm.Blues(0.3 + 0.7 * dmg[hit]), linewidths=1.5))
 
 
 def _section(ax, h, name, x, in_90, on, cols) -> None:
