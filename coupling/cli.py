@@ -134,7 +134,9 @@ def _params(name: str) -> int:
     case = load_case(name)
     schema = {**COMMON, **case.scene.PARAMETERS}
     for key in sorted(schema):
-        print(f"{key} = {case.parameters[key]!r}  # {schema[key].allowed()}; {schema[key].doc}")
+        value = case.parameters[key]
+        text = repr([list(row) for row in value]) if schema[key].kind == "table" else repr(value)  # as --set takes it
+        print(f"{key} = {text}  # {schema[key].allowed()}; {schema[key].doc}")
     return 0
 
 
