@@ -169,9 +169,13 @@ def cohesive_node_bonds(dyn: ExplicitDynamics, pairs: np.ndarray, area: np.ndarr
     at each force evaluation, their stable step (Gershgorin, 2 k on the lighter node) joins the
     FEM's."""
     from physics.law_bonds import LawBonds
-    # coincident nodes: the bond normal is the plate normal (+z from the lower ply)
-    bonds = LawBonds(pairs, dyn.region.X, np.tile([0.0, 0.0, 1.0], (len(pairs), 1)), area, law,
-                     friction=friction, label="interlaminar")
+    # coincident nodes: the bond normal is the laminate's (+y in a 2D slice, +z in 3D, from the
+    # lower ply); positions padded to 3D as FemNodes gives them
+    dim = dyn.region.dim
+    normal = np.zeros((len(pairs), 3))
+    normal[:, dim - 1] = 1.0
+    bonds = LawBonds(pairs, np.pad(dyn.region.X, ((0, 0), (0, 3 - dim))), normal, area, law, friction=friction,
+                     label="interlaminar")
     dyn.node_forces = [FemNodes(dyn).model(bonds, dyn)]
     k_bond = law.K * area
     m_pair = np.minimum(dyn.m[pairs[:, 0]], dyn.m[pairs[:, 1]])
