@@ -124,6 +124,29 @@ def split_interfaces(p: np.ndarray, t: np.ndarray, run: np.ndarray, levels, axis
     return p, t, np.vstack(pairs) if pairs else np.zeros((0, 2), int)
 
 
+def interface_areas(p: np.ndarray, t: np.ndarray, run: np.ndarray, levels, axis: int, tol: float) -> np.ndarray:
+    """(n,) the interface area each node stands for: each element of run k shares its face on the
+    plane p[axis] = levels[k] (its top) equally among that face's nodes; 2D faces are edges
+    (length, per unit thickness), 3D faces plane polygons (area). p (dim, n) m, t (nodes, nel)."""
+    area = np.zeros(p.shape[1])
+    for k, level in enumerate(levels):
+        elems = np.flatnonzero(run == k)
+        on = np.abs(p[axis][t[:, elems]] - level) < tol  # (nodes, m)
+        for e, mask in zip(elems, on.T):
+            nodes = t[mask, e]
+            if len(nodes) < p.shape[0]:  # no face on the plane (the element only touches it)
+                continue
+            q = np.delete(p[:, nodes], axis, axis=0).T  # the face in the plane's coordinates
+            if p.shape[0] == 2:
+                a = float(np.ptp(q[:, 0]))
+            else:  # a plane polygon: order its corners by angle, shoelace
+                c = q - q.mean(axis=0)
+                q = q[np.argsort(np.arctan2(c[:, 1], c[:, 0]))]
+                a = 0.5 * abs(float(np.dot(q[:, 0], np.roll(q[:, 1], -1)) - np.dot(q[:, 1], np.roll(q[:, 0], -1))))
+            area[nodes] += a / len(nodes)
+    return area
+
+
 def read_gmsh(path: str | Path, part: str) -> tuple[skfem.Mesh, dict[str, np.ndarray]]:
     """The elements of physical group ``part`` of a Gmsh mesh (2D quadrangles or triangles,
     or 3D hexahedra or tetrahedra: the part's highest dimension) as a scikit-fem mesh, and

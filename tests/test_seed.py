@@ -416,29 +416,33 @@ def test_beam_impact_coupled_equals_fem_over_ply_materials(femdem, E11, E22, G12
 COHESIVE = ["--set=laminates.beam.far_field_interfaces=cohesive"]
 
 
-def test_a_cohesive_far_field_holds_the_laminate_together_until_it_fails(femdem):
-    """Seed 5.1 all-FEM, strengths out of reach: the plies meshed apart and joined by the
-    interface law's node pairs bend as the plies sharing nodes (peak deflection within 1 %)."""
+@pytest.mark.parametrize("case", ["beam_impact_coarse", "beam_impact_3d_coarse"])
+def test_a_cohesive_far_field_holds_the_laminate_together_until_it_fails(femdem, case):
+    """Seed 5.1 all-FEM (2D slice, 3D quarter), strengths out of reach: the plies meshed apart and
+    joined by the interface law's node pairs bend as the plies sharing nodes (peak deflection
+    within 1 %)."""
     peaks = []
-    for extra in ([], COHESIVE):
-        code, s, err = femdem("run", "beam_impact_coarse", "--mode", "fem", *ELASTIC, *extra)
+    for extra in (["--set=laminates.beam.far_field_interfaces=tied"], COHESIVE):
+        code, s, err = femdem("run", case, "--mode", "fem", *ELASTIC, *extra)
         assert code == 0, err
         peaks.append(s["qoi"]["peak_centre_displacement"])
     assert abs(peaks[1] / peaks[0] - 1) < 0.01, peaks
 
 
-def test_a_cohesive_far_field_dissipates_what_its_debonded_area_costs(femdem):
+@pytest.mark.parametrize("case", ["beam_impact_coarse", "beam_impact_3d_coarse"])
+def test_a_cohesive_far_field_dissipates_what_its_debonded_area_costs(femdem, case):
     """Seed 5.1 all-FEM with cohesive ply interfaces, frictionless: the interfaces debond, and the
     energy they dissipate lies between GIc x the debonded area and GIIc x the damaged area
     (each bond dissipates its B-K toughness per area once traction-free, less before)."""
-    code, s, err = femdem("run", "beam_impact_coarse", "--mode", "fem", *COHESIVE,
+    code, s, err = femdem("run", case, "--mode", "fem", *COHESIVE,
                           "--set=interfaces.table1.friction=0", "--set=impactors.cylinder.friction=0")
     assert code == 0, err
     assert_checks(s)
     q, p = s["qoi"], s["parameters"]
     W = p["geometry.width"]
     t = p["zone.plies_per_particle"] * p["laminates.beam.ply_thickness"]
-    whole = s["energy"]["dissipated"] * 2 * W / t  # the half slice's ledger, for the whole beam
+    # the model's ledger for the whole beam: a half slice t thick (2D) or a quarter (3D)
+    whole = s["energy"]["dissipated"] * (4.0 if "3d" in case else 2 * W / t)
     debonded = sum(v for k, v in q.items() if k.startswith("delamination_area_"))
     damaged = sum(v for k, v in q.items() if k.startswith("damaged_interface_length_")) * W
     assert debonded > 0

@@ -130,10 +130,6 @@ class Study:
             for name_, kind in names["materials"].items():
                 if kind != "ply":
                     raise CaseError(f"materials.{name_}.kind = {kind!r}: geometry.shape = {shape!r} takes ply materials")
-            for name_ in names["laminates"]:
-                if shape not in ("disc", "beam") and P[f"laminates.{name_}.far_field_interfaces"].default == "cohesive":
-                    raise CaseError(f"laminates.{name_}.far_field_interfaces = 'cohesive': built for the beam slice "
-                                    f"and the disc so far (issue #24); allowed for geometry.shape = {shape!r}: 'tied'")
 
     def resolve_files(self, p: dict, folder) -> None:
         """Files a study reads (load curves, a mesh), relative to its case file's folder."""

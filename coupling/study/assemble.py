@@ -149,16 +149,13 @@ class Built:
     mesh_groups: dict = field(default_factory=dict)  # a mesh file's physical groups: name -> node coordinates
     node_bonds: LawBonds | None = None  # a cohesive far field's node-pair bonds
     fem_pairs: np.ndarray | None = None  # (k, 2) the FEM's doubled nodes, lower / upper
+    fem_pair_area: np.ndarray | None = None  # (k,) m^2 (per m of slice in 2D) each pair stands for
 
 
 def body_of(p: dict, mode: str) -> Built:
     """The body's laminate and particle size, before its participants exist."""
     lam = laminate(p, p["geometry.laminate"])
     lam.elastic = not p["zone.ply_failure"]
-    key = f"laminates.{p['geometry.laminate']}.far_field_interfaces"
-    if p[key] == "cohesive" and p["geometry.shape"] not in ("beam", "disc"):
-        raise CaseError(f"{key} = 'cohesive': built for the beam slice and the disc so far (issue #24); allowed for "
-                        f"geometry.shape = {p['geometry.shape']!r}: 'tied'")
     if p["geometry.shape"] == "disc":
         return Built(p, mode, lam, 0.5 * p["geometry.span"], p["zone.particle_size"], 4.0, dim=3)  # a quarter
     k = p["zone.plies_per_particle"]
@@ -224,8 +221,7 @@ def beam(study, p: dict, mode: str, dem: str):
         sim, clock = coupled_simulation(p, make, scene, dem, t_end, models=models)
         backend, built.dyn = clock.dem, clock.fem
         built.fem_elements = clock.fem.region.n_elements
-        if built.node_bonds is not None:
-            sim.energies = energies_with(sim.energies, [built.node_bonds])
+        _with_far_field(sim, built)
     built.backend = backend
     if dim == 3:
         held = np.concatenate([scene.groups.get("interface", []), scene.groups.get("fixed", [])]).astype(int)
@@ -330,14 +326,17 @@ def _file_region(p: dict, built: Built, x0: float):
 
 
 def _split(p: dict, built: Built, m, run: np.ndarray):
-    """The slice's mesh with its ply runs' interfaces doubled when the far field is cohesive
-    (the pairs kept in built.fem_pairs), else as it is."""
+    """The mesh with its ply runs' interfaces doubled when the far field is cohesive (the pairs
+    in built.fem_pairs, the interface area each stands for in built.fem_pair_area: a share of
+    the faces of the elements below it, per unit slice thickness in 2D), else as it is."""
     lam = built.lam
     if p[f"laminates.{p['geometry.laminate']}.far_field_interfaces"] != "cohesive":
         built.fem_pairs = None
         return m
+    axis, tol = m.dim() - 1, 1e-9 * lam.ply_thickness
     levels = np.cumsum(lam.plies)[:-1] * lam.ply_thickness
-    P, T, built.fem_pairs = mesh.split_interfaces(m.p, m.t, run, levels, 1, 1e-9 * lam.ply_thickness)
+    P, T, built.fem_pairs = mesh.split_interfaces(m.p, m.t, run, levels, axis, tol)
+    built.fem_pair_area = mesh.interface_areas(P, T, run, levels, axis, tol)[built.fem_pairs[:, 0]]
     return type(m)(np.ascontiguousarray(P), np.ascontiguousarray(T))
 
 
@@ -351,7 +350,7 @@ def _fem_block(p: dict, built: Built, x0: float):
                  np.linspace(0.0, lam.thickness, sum(lam.plies) // k + 1), "hex8")
     run = np.searchsorted(np.cumsum(lam.plies) * lam.ply_thickness, m.p[2, m.t].mean(axis=0))
     C = np.array([lam.C(lam.angles[b]) for b in run])
-    return make_region(m, p, C, lam.ply["rho"], 1.0)
+    return make_region(_split(p, built, m, run), p, C, lam.ply["rho"], 1.0)
 
 
 def _fem_beam(study, p: dict, built: Built, t_end: float):
@@ -382,31 +381,29 @@ def _fem_beam(study, p: dict, built: Built, t_end: float):
                                                           groups=built.mesh_groups), impactors=list(imps.values()))
     built.dyn, built.impactors, built.fem_elements = dyn, imps, region.n_elements
     built.node_bonds = _far_field_bonds(p, built, dyn)
-    sim = fem_only(dyn, p, t_end, {})
+    return _with_far_field(fem_only(dyn, p, t_end, {}), built)
+
+
+def _with_far_field(sim, built: Built):
+    """The simulation with the far field's node pairs in its energy ledger (when it has any)."""
     if built.node_bonds is not None:
         sim.energies = energies_with(sim.energies, [built.node_bonds])
     return sim
 
 
 def _far_field_bonds(p: dict, built: Built, dyn: ExplicitDynamics) -> LawBonds | None:
-    """A slice's cohesive far field (laminates' far_field_interfaces = "cohesive"): the node
+    """A cohesive far field (laminates' far_field_interfaces = "cohesive"): the node
     pairs the mesh doubled at the ply runs' interfaces, joined by the laminate's interface law
     with its penalty (0: 50 x the plies' smallest transverse modulus over the particle size,
     stiff against an element row as Turon et al. 2007 advise, or less where that would lower
-    the elements' stable step), each pair standing for its tributary length along x times the
-    slice's thickness; None with tied plies."""
+    the elements' stable step), each pair standing for its share of the interface (times the
+    slice's thickness in 2D); None with tied plies."""
     pairs = built.fem_pairs
     if pairs is None or len(pairs) == 0:
         return None
     lam, name = built.lam, p[f"laminates.{p['geometry.laminate']}.interface"]
-    itf, X = lam.interface, dyn.region.X
-    area = np.zeros(len(pairs))
-    for level in np.unique(np.round(X[pairs[:, 0], 1], 12)):  # each interface: lengths between midpoints
-        on = np.flatnonzero(np.abs(X[pairs[:, 0], 1] - level) < 1e-9 * lam.thickness)
-        on = on[np.argsort(X[pairs[on, 0], 0])]
-        x = X[pairs[on, 0], 0]
-        mid = np.concatenate([[x[0]], 0.5 * (x[1:] + x[:-1]), [x[-1]]])
-        area[on] = np.diff(mid) * built.t
+    itf = lam.interface
+    area = built.fem_pair_area * (built.t if dyn.region.dim == 2 else 1.0)  # a 2D slice is t thick
     # as stiff as 50 E_y / d but no stiffer than the elements' own stable step allows (a node pair
     # of masses m and stiffness k = K area is stable below sqrt(m / k))
     dt_el = dyn.region.critical_dt(dyn.density_scale)
@@ -519,7 +516,8 @@ def plate(study, p: dict, mode: str, dem: str):
         dyn = ExplicitDynamics(region, supports=_plate_supports(region, built, clamp, symmetry=True),
                                impactors=list(imps.values()))
         built.dyn, built.impactors, built.fem_elements = dyn, imps, region.n_elements
-        return fem_only(dyn, p, t_end, {}), built
+        built.node_bonds = _far_field_bonds(p, built, dyn)
+        return _with_far_field(fem_only(dyn, p, t_end, {}), built), built
     if mode == "coupled" and not 2 * d < w < 0.8 * min(a2, b2):
         raise CaseError(f"zone.half_width = {w:g}: allowed between two particle sizes ({2 * d:g} m) and 0.8 x "
                         "the plate's smaller half side")
@@ -546,10 +544,13 @@ def plate(study, p: dict, mode: str, dem: str):
     else:
         def make(extra_mass):
             region = _fem_plate(p, built, hole=True)
-            return ExplicitDynamics(region, supports=_plate_supports(region, built, clamp, symmetry=True),
-                                    extra_mass=extra_mass)
+            dyn = ExplicitDynamics(region, supports=_plate_supports(region, built, clamp, symmetry=True),
+                                   extra_mass=extra_mass)
+            built.node_bonds = _far_field_bonds(p, built, dyn)
+            return dyn
         sim, clock = coupled_simulation(p, make, scene, dem, t_end, models=models)
         backend, built.dyn, built.fem_elements = clock.dem, clock.fem, clock.fem.region.n_elements
+        _with_far_field(sim, built)
     built.backend = backend
     held = np.concatenate([scene.groups.get("interface", []), scene.groups.get("fixed", [])]).astype(int)
     hold_symmetry_planes(backend, i, j, held)
@@ -577,7 +578,8 @@ def _fem_plate(p: dict, built: Built, hole: bool):
         m = m.remove_elements(np.flatnonzero((centre[0] < w) & (centre[1] < w)))
         centre = m.p[:, m.t].mean(axis=1)
     run = np.searchsorted(np.cumsum(lam.plies) * lam.ply_thickness, centre[2])
-    return make_region(m, p, np.array([lam.C(lam.angles[b]) for b in run]), lam.ply["rho"], 1.0)
+    return make_region(_split(p, built, m, run), p, np.array([lam.C(lam.angles[b]) for b in run]), lam.ply["rho"],
+                       1.0)
 
 
 def _plate_supports(region, built: Built, clamp: bool, symmetry: bool) -> list[PrescribedMotion]:
