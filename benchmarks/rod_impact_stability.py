@@ -90,7 +90,7 @@ def main() -> int:
         rows.append(row)
         print(f"{label}: {row['outcome']} {row.get('detail', '')[:160]}", file=sys.stderr)
     (out / "stability_map.json").write_text(json.dumps(rows, indent=2))
-    print(f"| setting | paper | step (s) | this program | how it was detected |")
+    print("| setting | paper | step (s) | this program | how it was detected |")
     print("|---|---|---|---|---|")
     for r in rows:
         what = r["outcome"]
