@@ -119,12 +119,14 @@ def _main(argv: list[str] | None) -> int:
 
 
 def _cases() -> int:
-    for name, path in bundled_cases().items():
+    cases = bundled_cases()
+    w = max(map(len, cases), default=0)
+    for name, path in cases.items():
         try:
             case = load_case(str(path))
-            print(f"{name:24s} {'/'.join(case.scene.MODES):18s} {case.description}")
+            print(f"{name:{w}s}  {'/'.join(case.scene.MODES):16s} {case.description}")
         except CaseError as exc:
-            print(f"{name:24s} (invalid: {exc})")
+            print(f"{name:{w}s}  (invalid: {exc})")
     return 0
 
 
