@@ -101,8 +101,8 @@ def bench(case_name: str, sweep: dict[str, list[str]], base: dict, ref_mode: str
           mode: str, out: Path, qoi: list[str] | None = None) -> dict:
     """Run the sweep; dem: one engine or several separated by commas (an axis of the sweep:
     one curve each; the reference runs on the first); qoi: names compared with the reference
-    (default: every qoi both runs report whose name does not end in _rel, since those are
-    already error measures)."""
+    (default: every qoi both runs report, except those ending in _rel, already error measures,
+    and the model's size, a cost, not an error)."""
     sweep_points(case_name, sweep, base, ref_mode, ref_set, dem, mode)
     out.mkdir(parents=True, exist_ok=True)
     engines = dem.split(",")
@@ -121,7 +121,8 @@ def bench(case_name: str, sweep: dict[str, list[str]], base: dict, ref_mode: str
         name = "_".join(f"{k.split('.')[-1]}{v}" for k, v in zip(keys, combo)) or "base"
         name = f"{engine}_{name}" if len(engines) > 1 else name
         code, _, s = execute(case, mode, engine, out / name, quiet=True)
-        names = qoi or [q for q in s["qoi"] if q in ref["qoi"] and not q.endswith("_rel")]
+        names = qoi or [q for q in s["qoi"] if q in ref["qoi"] and not q.endswith("_rel")
+                        and not q.startswith("model_size")]
         errors = {q: abs(s["qoi"][q] - ref["qoi"][q]) / abs(ref["qoi"][q]) for q in names
                   if q in s["qoi"] and q in ref["qoi"] and ref["qoi"][q]}
         points.append({"setting": dict(zip(keys, combo)), "dem": engine, "status": s["status"], "wall_s": s["timing_s"]["total"],
