@@ -197,7 +197,7 @@ def resolve(schema: dict[str, Param], given: dict[str, Any], where: str,
         key = unknown[0]
         new = next((k + note for k, note in RENAMED.get(key, ()) if k in schema), None)
         new = new or (renamed(key) if renamed else None)
-        if new:
+        if new and new.split()[0] in schema:  # (a renaming to a key this case lacks is no answer)
             raise CaseError(f"{key}: renamed, now {new} (in {where})")
         near = [k for k in schema if k.split(".")[-1] == key.split(".")[-1] or k.startswith(key.split(".")[0] + ".")]
         hint = f"; known keys here: {', '.join(sorted(near)[:8])}" if near else ""

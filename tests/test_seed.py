@@ -312,9 +312,9 @@ def test_panel_buckling_fem_over_its_geometry(femdem, E11, share, plies):
     """Seed 5.2 all-FEM over the ply modulus, the delamination length (0.4 to 0.55 of the
     span) and the sublaminate's plies: axial stiffness, local and global buckling loads against
     their closed forms at the case's tolerances (issue #22)."""
-    code, s, err = femdem("run", "panel_buckling_coarse", "--mode", "fem", f"--set=material.E11={E11}",
-                          f"--set=geometry.delamination_length={share * 74e-3}",
-                          f"--set=geometry.sublaminate_plies={plies}")
+    code, s, err = femdem("run", "panel_buckling_coarse", "--mode", "fem", f"--set=materials.table2.E11={E11}",
+                          f"--set=delaminations.film.length={share * 74e-3}",
+                          f"--set=delaminations.film.sublaminate_plies={plies}")
     assert code == 0, err
     assert_checks(s)
 
@@ -340,7 +340,7 @@ def test_panel_buckling_coupled_equals_fem_before_buckling(femdem, tmp_path):
     runs = {}
     for mode in ("fem", "coupled"):
         code, s, err = femdem("run", "panel_buckling_coarse", "--mode", mode, *DEM[mode],
-                              "--set=clock.t_end=0.5e-3", "--set=load.duration_periods=16")
+                              "--set=clock.t_end=0.5e-3", "--set=loads.compression.duration_periods=16")
         assert code == 0, err
         runs[mode] = s
     import h5py
@@ -370,7 +370,7 @@ def test_panel_buckling_coarse_coupled_growth(femdem):
 def test_stepped_column_reduces_to_euler_and_engesser():
     """The delaminated panel's closed form: a uniform column gives Euler's clamped load, and
     with shear flexibility Engesser's P_E / (1 + P_E / kGA); a softer middle lowers it."""
-    from coupling.scenes.panel_buckling import stepped_column_load
+    from coupling.study.buckling import stepped_column_load
     EI, L = 2.0, 1.0
     PE = 4 * np.pi**2 * EI / L**2
     assert stepped_column_load(EI, EI, L, 0.4, 0.0, 3 * PE) == pytest.approx(PE, rel=1e-9)
@@ -383,12 +383,12 @@ def test_film_closed_form_tends_to_rigid_clamps_for_a_stiff_ply():
     thin film and reaches it as G12 grows (chi h -> 0 and Engesser's term -> 0); a thicker film
     (larger chi h / l) falls further below it."""
     from coupling.case import load_case
-    from coupling.scenes.panel_buckling import closed_forms
+    from coupling.study.panel import panel_of
     p = load_case("panel_buckling", {}).parameters
-    ratio = lambda q: (lambda cf: cf["local"] / cf["local_clamped"])(closed_forms(q))
+    ratio = lambda q: (lambda cf: cf["local"] / cf["local_clamped"])(panel_of(q).loads())
     assert ratio(p) < 1
-    assert ratio({**p, "material.G12": 1e6 * p["material.G12"]}) == pytest.approx(1, rel=5e-3)
-    assert ratio({**p, "geometry.sublaminate_plies": 8}) < ratio(p)
+    assert ratio({**p, "materials.table2.G12": 1e6 * p["materials.table2.G12"]}) == pytest.approx(1, rel=5e-3)
+    assert ratio({**p, "delaminations.film.sublaminate_plies": 8}) < ratio(p)
 
 
 PLY_RANGES = dict(E11=st.floats(80e9, 200e9), E22=st.floats(6e9, 12e9), G12=st.floats(3e9, 7e9),

@@ -1,6 +1,5 @@
-"""Scenes: builders that turn resolved case parameters into a Simulation (the cases not yet
-written as studies, coupling/study/, and the verification cases whose closed forms need their
-own code).
+"""Scenes: builders that turn resolved case parameters into a Simulation (the verification
+cases whose closed forms need their own code; every seed case is a study, coupling/study/).
 
 A scene module declares NAME, DESCRIPTION, MODES (the modes it supports), PARAMETERS
 (dotted key -> Param) and three functions:
@@ -15,7 +14,7 @@ from __future__ import annotations
 from types import ModuleType
 
 from . import (bar_wave, block_impact, bonded_block, cantilever, chain_consistency, chung_ooi, column_buckling, coupled_free_flight,
-               coupled_vibration, dcb, enf, free_vibration, interface_patch, interface_wave, mixed_mode, panel_buckling, ply_fracture)
+               coupled_vibration, dcb, enf, free_vibration, interface_patch, interface_wave, mixed_mode, ply_fracture)
 
 Scene = ModuleType
 SCENES: dict[str, Scene] = {m.NAME: m for m in (
@@ -24,5 +23,4 @@ SCENES: dict[str, Scene] = {m.NAME: m for m in (
     bonded_block.BONDED_BLOCK_MODULUS, bonded_block.BOND_STRENGTH, bonded_block.BONDED_BEAM_BENDING,
     chain_consistency, coupled_free_flight, interface_patch, interface_wave, coupled_vibration,  # coupling
     dcb, enf, mixed_mode, ply_fracture,  # damage physics
-    panel_buckling,  # seed examples
 )}

@@ -93,7 +93,11 @@ PARAMETERS: dict[str, Param] = {
 
 def chi(p: dict) -> float:
     """Crack-length correction factor of corrected beam theory (Hashemi, Kinloch & Williams 1990)."""
-    E11, E22, G13 = p["material.E11"], p["material.E22"], p["material.G13"]
+    return chi_of(p["material.E11"], p["material.E22"], p["material.G13"])
+
+
+def chi_of(E11: float, E22: float, G13: float) -> float:
+    """chi of a ply's moduli (Pa)."""
     gamma = 1.18 * np.sqrt(E11 * E22) / G13
     return float(np.sqrt(E11 / (11 * G13) * (3 - 2 * (gamma / (1 + gamma)) ** 2)))
 
@@ -237,7 +241,11 @@ def check_resolution(p: dict) -> None:
                         f"allowed <= h / 6 = {h / 6:g} m")
 
 
-def resolved_strengths(p: dict, d: float) -> tuple[float, float]:
+SCENE_KEYS = {"Z0": "interface.Z0", "R0": "interface.R0", "GIc": "interface.GIc", "GIIc": "interface.GIIc",
+              "E22": "material.E22", "N": "interface.cohesive_zone_bonds"}
+
+
+def resolved_strengths(p: dict, d: float, keys: dict = SCENE_KEYS) -> tuple[float, float]:
     """(Z0, R0) Pa used by the law: the given strengths, lowered where the cohesive zone would
     span fewer than interface.cohesive_zone_bonds bonds of length d. Turon, Davila, Camanho &
     Costa (2007), Eng. Fract. Mech. 74: l_cz = (9 pi / 32) E22 Gc / tau^2 (Rice's estimate);
@@ -246,13 +254,15 @@ def resolved_strengths(p: dict, d: float) -> tuple[float, float]:
     the coarse DCB, d = 0.5 mm: N = 5 gave the peak 7.7 % high and a propagation RMS error of
     12 %, N = 19 gave 0.1 % and 8 %), hence the default 20. Refused (CaseError) when a
     strength's elastic energy at initiation, tau^2 / (2 K) with K = E22 / d, exceeds its Gc:
-    linear softening cannot start there."""
-    N = p["interface.cohesive_zone_bonds"]
-    Z0, R0 = p["interface.Z0"], p["interface.R0"]
+    linear softening cannot start there. keys: where the case keeps each value (a study's
+    names differ from the scenes')."""
+    N, E22 = p[keys["N"]], p[keys["E22"]]
+    Z0, R0 = p[keys["Z0"]], p[keys["R0"]]
     if N > 0:
-        Z0, R0 = min(Z0, cap_strength(p, p["interface.GIc"], N, d)), min(R0, cap_strength(p, p["interface.GIIc"], N, d))
-    K = p["material.E22"] / d
-    for key, tau, gkey in (("interface.Z0", Z0, "interface.GIc"), ("interface.R0", R0, "interface.GIIc")):
+        Z0, R0 = min(Z0, cap_strength(E22, p[keys["GIc"]], N, d)), min(R0, cap_strength(E22, p[keys["GIIc"]], N, d))
+    K = E22 / d
+    for name, tau, gname in (("Z0", Z0, "GIc"), ("R0", R0, "GIIc")):
+        key, gkey = keys[name], keys[gname]
         if p[gkey] < tau**2 / (2 * K):
             raise CaseError(f"{gkey} = {p[gkey]:g}: below the elastic energy at initiation {key}^2 / (2 K) = "
                             f"{tau**2 / (2 * K):.4g} J/m^2 (K = E22 / d, d = {d:g} m); allowed: {gkey} >= that, "
@@ -260,9 +270,9 @@ def resolved_strengths(p: dict, d: float) -> tuple[float, float]:
     return Z0, R0
 
 
-def cap_strength(p: dict, Gc: float, N: float, d: float) -> float:
+def cap_strength(E22: float, Gc: float, N: float, d: float) -> float:
     """Pa, the strength whose Rice cohesive zone (9 pi / 32) E22 Gc / tau^2 spans N bonds of length d."""
-    return float(np.sqrt(9 * np.pi * p["material.E22"] * Gc / (32 * N * d)))
+    return float(np.sqrt(9 * np.pi * E22 * Gc / (32 * N * d)))
 
 
 def cohesive_zone_length(p: dict, Gc: float, tau: float, mode: str) -> float:

@@ -16,6 +16,7 @@ from . import closed_forms, fields, probes
 from .assemble import beam, plate
 from .bonded import bonded_beam
 from .disc import disc
+from .panel import panel as assemble_panel
 from .schema import BONDED, LAMINATED, MODES, document, parameters
 
 __all__ = ["Study", "document_schema", "renamed"]
@@ -34,7 +35,15 @@ class Study:
             raise CaseError(f"case.modes = {modes!r}: allowed a list of {', '.join(MODES)}")
         self.MODES = tuple(modes)
         t_end = meta.get("t_end")
-        if isinstance(t_end, bool) or not isinstance(t_end, (int, float)) or not t_end > 0:
+        shape = self.PARAMETERS["geometry.shape"].default
+        if shape == "panel":  # a panel's run lasts its load's ramp
+            if t_end is not None:
+                raise CaseError(f"case.t_end = {t_end!r}: a panel's run lasts its load's duration_periods; allowed: "
+                                "leave it out (clock.t_end cuts a run short)")
+            if "dem" in self.MODES:
+                raise CaseError(f"case.modes = {modes!r}: a panel runs in coupled and fem modes; allowed: leave dem out")
+            t_end = np.inf
+        elif isinstance(t_end, bool) or not isinstance(t_end, (int, float)) or not t_end > 0:
             raise CaseError(f"case.t_end = {t_end!r}: required in {where}; allowed a number > 0 [s]")
         self.t_end = float(t_end)
         ref = meta.get("reference_elements", 0)
@@ -45,15 +54,14 @@ class Study:
         if not isinstance(self.no_fracture_reference, bool):
             raise CaseError(f"case.no_fracture_reference = {self.no_fracture_reference!r}: allowed true or false")
         self._no_fracture = {}
-        shape = self.PARAMETERS["geometry.shape"].default
         self._shape_tables(shape, data)
         want = {"beam": ("x", "quad4"), "beam_3d": ("xy", "hex8"), "plate": ("xy", "hex8"), "disc": ("xy", "hex8"),
-                "bonded_beam": ("x", "quad4"), "bonded_beam_3d": ("xy", "hex8")}[shape]
+                "bonded_beam": ("x", "quad4"), "bonded_beam_3d": ("xy", "hex8"), "panel": ("none", "quad4")}[shape]
         at = {"plate": "edges", "disc": "rim"}.get(shape, "ends")
         for name_, kind in self.layout.names["supports"].items():
             if kind != at:
                 raise CaseError(f"supports.{name_}.at = {kind!r}: geometry.shape = {shape!r} is supported at its {at}")
-        shapes = {"plate": ("sphere",), "disc": ("rod",), "bonded_beam": (), "bonded_beam_3d": ()}.get(shape,
+        shapes = {"plate": ("sphere",), "disc": ("rod",), "bonded_beam": (), "bonded_beam_3d": (), "panel": ()}.get(shape,
                                                                                                       ("cylinder",))
         for name_, kind in self.layout.names["impactors"].items():
             if kind not in shapes:
@@ -67,7 +75,8 @@ class Study:
                             f"geometry.shape = '{shape}_3d'")
         for name_, kind in self.layout.names["checks"].items():
             qoi = self.PARAMETERS[f"checks.{name_}.qoi"].default
-            if not any(p in qoi for p in self.layout.names["probes"]):
+            kinds = self.layout.names["probes"]
+            if not any(p in qoi or qoi in probes.PROBES[k].reports for p, k in kinds.items()):
                 raise CaseError(f"checks.{name_}.qoi = {qoi!r}: no probe of this study reports it; allowed a qoi of "
                                 f"the probes {', '.join(self.layout.names['probes']) or '(none declared)'}")
 
@@ -76,6 +85,32 @@ class Study:
         material, depth, one sheet and one load; keys of the other kind are refused."""
         P, names = self.PARAMETERS, self.layout.names
         given = lambda table, key: key in data.get(table, {})
+        if shape != "panel" and names["delaminations"]:
+            raise CaseError(f"[delaminations.{next(iter(names['delaminations']))}]: geometry.shape = {shape!r} takes "
+                            "none (a panel's)")
+        want_load = "shortening" if shape == "panel" else "patch"
+        for name_, kind in names["loads"].items():
+            if kind != want_load:
+                raise CaseError(f"loads.{name_}.kind = {kind!r}: geometry.shape = {shape!r} takes {want_load!r}")
+        if shape == "panel":
+            for table in ("sheets", "impactors"):
+                if names.get(table):
+                    raise CaseError(f"[{table}.{next(iter(names[table]))}]: geometry.shape = 'panel' takes none")
+            for table in ("delaminations", "loads", "supports"):
+                if len(names[table]) != 1:
+                    raise CaseError(f"[{table}.NAME]: geometry.shape = 'panel' takes exactly one; given "
+                                    f"{len(names[table])}")
+            for name_, kind in names["materials"].items():
+                if kind != "ply":
+                    raise CaseError(f"materials.{name_}.kind = {kind!r}: geometry.shape = 'panel' takes ply materials")
+            # the FEM's crack is the delamination's (no far-field cohesive interfaces): not a panel's keys
+            for table, field in (("laminates", "far_field_interfaces"), ("interfaces", "penalty")):
+                for name_ in names[table]:
+                    if field in data[table][name_]:
+                        raise CaseError(f"{table}.{name_}.{field}: has no effect on geometry.shape = 'panel'; allowed: "
+                                        "leave it out")
+                    P.pop(f"{table}.{name_}.{field}", None)
+            return
         if shape == "disc":
             need = [("geometry", "laminate"), ("zone", "particle_size")]
             refuse = [("geometry", k) for k in ("material", "depth", "length", "width")] + \
@@ -153,14 +188,16 @@ class Study:
             or key in ("geometry.shape", "zone.shape", "geometry.symmetry")
 
     def build(self, p: dict, mode: str, dem: str):
-        assemble = {"plate": plate, "disc": disc, "bonded_beam": bonded_beam, "bonded_beam_3d": bonded_beam}
+        assemble = {"plate": plate, "disc": disc, "bonded_beam": bonded_beam, "bonded_beam_3d": bonded_beam,
+                    "panel": assemble_panel}
         sim, built = assemble.get(p["geometry.shape"], beam)(self, p, mode, dem)
         sim.probes.update(probes.series(self, built, p))
-        size = float(built.fem_elements + (built.lattice.n if built.lattice is not None else 0))
+        size = float(built.fem_elements + (built.lattice.n if built.lattice is not None else built.particles))
         sim.probes["model_size"] = lambda: size  # elements + particles
         if built.lattice is not None:
             _damage_snapshots(sim, built)
-        sim.fields = fields.frames(built)  # the whole structure (study/fields.py)
+        if p["geometry.shape"] != "panel":  # (a panel keeps its participants' frames: FEM and windows)
+            sim.fields = fields.frames(built)  # the whole structure (study/fields.py)
         return sim
 
     def evaluate(self, p: dict, history: dict, mode: str):
@@ -180,6 +217,10 @@ class Study:
 
     def plot(self, p: dict, history: dict, qoi: dict, plots_dir):
         from . import plots
+        if p["geometry.shape"] == "panel":
+            from .panel import plot
+            plot(p, history, qoi, plots_dir)
+            return
         plots.histories(self, p, history, qoi, plots_dir)
         plots.damage(history, plots_dir)
 
@@ -238,6 +279,17 @@ def renamed(key: str, study: Study) -> str | None:
     names = study.layout.names
     one = lambda c: next(iter(names[c]), None)
     tail = key.split(".", 1)[-1]
+    if names["delaminations"]:  # the former panel_buckling scene's
+        delam, load = f"delaminations.{one('delaminations')}", f"loads.{one('loads')}"
+        new = {"geometry.length": "geometry.span", "geometry.delamination_length": f"{delam}.length",
+                "geometry.sublaminate_plies": f"{delam}.sublaminate_plies", "local.imperfection": f"{delam}.imperfection",
+                "global.imperfection": "geometry.imperfection", "interface.contact": f"{delam}.contact",
+                "interface.penalty": f"{delam}.penalty", "interface.cohesive_zone_bonds": "zone.cohesive_zone_bonds",
+                "load.shortening_factor": f"{load}.shortening_factor", "load.duration_periods": f"{load}.duration_periods",
+                "geometry.ply_thickness": f"laminates.{one('laminates')}.ply_thickness",
+                "geometry.plies": f"laminates.{one('laminates')}.layup"}.get(key)
+        if new:
+            return new
     if key.startswith(("material.", "strength.", "fracture.")) and one("materials"):
         lam = study.PARAMETERS["geometry.laminate"].default
         return f"materials.{study.PARAMETERS[f'laminates.{lam}.material'].default}.{tail}"

@@ -150,6 +150,8 @@ class Built:
     node_bonds: LawBonds | None = None  # a cohesive far field's node-pair bonds
     fem_pairs: np.ndarray | None = None  # (k, 2) the FEM's doubled nodes, lower / upper
     fem_pair_area: np.ndarray | None = None  # (k,) m^2 (per m of slice in 2D) each pair stands for
+    particles: int = 0  # particles outside a lattice (a panel's windows)
+    panel: object = None  # a panel's parts the probes read (study/panel.py)
 
 
 def body_of(p: dict, mode: str) -> Built:

@@ -21,7 +21,9 @@ class ProbeKind:
     doc: str
     fields: dict[str, Param]
     series: Callable  # (built, name, fields) -> {series name: () -> float}
-    qoi: Callable  # (name, fields, history) -> {qoi name: float}
+    qoi: Callable  # (name, fields, history[, p]) -> {qoi name: float}
+    with_params: bool = False  # qoi also takes the resolved parameters (readings that need the geometry)
+    reports: tuple = ()  # qoi names it reports whatever the probe's name (the others contain the name)
 
 
 def _point_series(built, name, f):
@@ -239,6 +241,26 @@ def _max_qoi(name, f, h):
     return {name: float(np.max(h[name]))} if name in h else {}
 
 
+def _panel_buckling_series(built, name, f):
+    from .panel import buckling_series
+    return buckling_series(built, name, f)
+
+
+def _panel_buckling_qoi(name, f, h, p):
+    from .panel import buckling_qoi
+    return buckling_qoi(name, f, h, p) if "axial_force" in h else {}
+
+
+def _growth_series(built, name, f):
+    from .panel import growth_series
+    return growth_series(built, name, f)
+
+
+def _growth_qoi(name, f, h, p):
+    from .panel import growth_qoi
+    return growth_qoi(name, f, h, p)
+
+
 _COMPONENTS = ("x", "y", "z", "-x", "-y", "-z")
 PROBES: dict[str, ProbeKind] = {
     "point_displacement": ProbeKind(
@@ -299,6 +321,28 @@ PROBES: dict[str, ProbeKind] = {
         "debonded_fraction_<at>us (of beam_length), sheet_broken_bonds",
         {"at": positive(750e-6, "the time of the debonded fraction (of the beam's and sheet's length)", "s")},
         _debond_series, _when("{name}_length")(_debond_qoi)),
+    "panel_buckling": ProbeKind(
+        "a panel's axial_force, end_shortening, deflection_A / deflection_B (mid-span, top and bottom faces), "
+        "film_strain (the sublaminate's membrane strain), contact_force and interpenetration of the delaminated "
+        "faces; qoi local_buckling_load (the film's critical strain x E11 H b), global_buckling_load (the limit "
+        "load), film_critical_strain, their Southwell fits, axial_stiffness, tip_energy_release_rate (panels)",
+        {}, _panel_buckling_series, _panel_buckling_qoi, with_params=True,
+        reports=("local_buckling_load", "global_buckling_load", "film_critical_strain", "axial_stiffness",
+                 "local_buckling_load_southwell", "global_buckling_load_southwell", "peak_axial_force",
+                 "max_interpenetration", "tip_energy_release_rate")),
+    "delamination_growth": ProbeKind(
+        "a panel's delamination growth in the DEM windows (coupled): growth_left / growth_right, tip_mode_ratio, "
+        "interface_dissipated; qoi delamination_growth_left / _right, delamination_length_at_limit_load, "
+        "growth_onset_load and its closed form (Hutchinson & Suo for the measured mode mix), "
+        "dissipated_per_new_area, growth_reached_window_edge (panels)",
+        {}, _growth_series, _growth_qoi, with_params=True,
+        reports=("delamination_growth_left", "delamination_growth_right", "delamination_length_final",
+                 "delamination_length_at_limit_load", "growth_onset_load", "growth_mode_ratio",
+                 "growth_reached_window_edge", "dissipated_per_new_area", "interface_dissipated")),
+    "literature_value": ProbeKind(
+        "a value from a paper or a test, reported beside the run's as qoi NAME (not checked: a check compares)",
+        {"value": Param(0.0, "the value (SI)"), "source": Param("", "where it comes from", kind="str")},
+        lambda built, name, f: {}, lambda name, f, h, p: {name: f["value"]}, with_params=True),
 }
 
 
@@ -316,6 +360,9 @@ def qoi(study, p: dict, history: dict) -> dict:
         fields = section(p, f"probes.{name}")
         if kind == "debonding":  # the fraction is of the sheet's length, the beam's
             fields["beam_length"] = p["geometry.length"] or p["geometry.span"]
-        if kind == "interface_damage" or any(k == name or k.startswith(name + "_") for k in history):
-            out.update(PROBES[kind].qoi(name, fields, history))
+        probe = PROBES[kind]
+        if probe.with_params:
+            out.update(probe.qoi(name, fields, history, p))
+        elif kind == "interface_damage" or any(k == name or k.startswith(name + "_") for k in history):
+            out.update(probe.qoi(name, fields, history))
     return out

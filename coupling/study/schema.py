@@ -16,12 +16,14 @@ Sections (one concept, one key):
                 thickness, centred on x = 0), "beam_3d" (a quarter of it, the thickness along
                 z), "plate" (a quarter of a rectangular plate), "bonded_beam" (a plane-stress
                 slice of a beam of one isotropic material with a sheet bonded under it) or
-                "bonded_beam_3d" (a quarter of it) or "disc" (a quarter of a circular plate); its
+                "bonded_beam_3d" (a quarter of it) or "disc" (a quarter of a circular plate) or
+                "panel" (a slice of a laminate clamped at both ends, with a delamination); its
                 laminate (with tied or cohesive FEM interfaces) or material and depth, span,
                 width, length, symmetry
 - mesh:         FEM elements and their sizing, graded towards the zone
 - fem:          the FEM's integration and formulation
-- zone:         the DEM damage zone: shape "box" (|x| <= half_width, the whole thickness),
+- zone:         the DEM damage zone: shape "box" (|x| <= half_width, the whole thickness) or
+                "crack_tips" (a panel's: a window across the delamination at each tip),
                 plies_per_particle (laminates) or particle_size (bonded beams, the disc),
                 ply_failure
 - supports.*:   at "ends" (a beam's, x = +-span / 2), "edges" (a plate's) or "rim" (a disc's),
@@ -31,7 +33,10 @@ Sections (one concept, one key):
                 radius, mass, velocity, penalty, friction) or "rod" (a disc's, flat-faced, on its
                 centre: radius, length, rho, velocity, penalty per area)
 - loads.*:      kind "patch" (a bonded beam's: a force history on its top face about x = 0, as
-                a curve of [time, force] rows or a CSV file, with scale factors)
+                a curve of [time, force] rows or a CSV file, with scale factors) or "shortening" (a
+                panel's: the end shortening, a slow ramp in periods of its first mode)
+- delaminations.*: kind "through_width" (a panel's: the plies above it, its length, centred,
+                the sublaminate's bump, contact of its faces)
 - probes.*:     kind from the registry (study/probes.py), with what the run reports of them
 - checks.*:     a qoi against a closed form registered in code (study/closed_forms.py) or against
                 a test's value or range given with its source
@@ -49,7 +54,7 @@ from ..params import CaseError, Param, density, modulus, positive
 from ..participants.coupled import COUPLING
 
 REQUIRED = None  # a field's default when the file must give it
-SHAPES = ("beam", "beam_3d", "plate", "disc", "bonded_beam", "bonded_beam_3d")
+SHAPES = ("beam", "beam_3d", "plate", "disc", "bonded_beam", "bonded_beam_3d", "panel")
 LAMINATED, BONDED = ("beam", "beam_3d", "plate", "disc"), ("bonded_beam", "bonded_beam_3d")
 
 
@@ -153,6 +158,27 @@ KINDS: dict[str, dict[str, dict[str, Param]]] = {
             "value_scale": positive(1.0, "factor on the curve's forces to N (1e3: given in kN; SFO)", ""),
             "scale": positive(1.0, "factor on the load (a study's knob)", ""),
         },
+        "shortening": {  # a panel's: its right end moves towards its left, both ends clamped otherwise
+            "shortening_factor": Param(1.6, "final end shortening / the intact panel's Euler shortening "
+                                       "P_euler L / (E11 A)", low=1.1, high=5.0),
+            # the film's snap lags a fast ramp: its reading fell 4 % from 32 to 64 periods and 2 % more
+            # at 128 (full mesh, all-FEM); 64 is within 2 % of the slowest
+            "duration_periods": Param(64.0, "loading time (a sin^2 ramp of the shortening rate) in periods of the "
+                                      "panel's first mode; the run's duration", low=2.0),
+        },
+    },
+    "delaminations": {
+        "through_width": {  # a panel's: centred on its span, between two plies, across the whole width
+            "sublaminate_plies": Param(REQUIRED, "plies above the delamination (the sublaminate that buckles)",
+                                       kind="int", low=1, high=199),
+            "length": positive(REQUIRED, "delamination length l (centred on the span)", "m"),
+            "imperfection": Param(0.02, "initial outward bump of the sublaminate / its thickness", low=1e-4,
+                                  high=1.0),
+            "contact": Param(True, "frictionless penalty contact between the delaminated faces (no "
+                             "interpenetration)", kind="bool"),
+            "penalty": Param(0.0, "contact stiffness per area; 0 = E22 / (sublaminate element height), softened so "
+                             "that it does not lower the elements' stable step", unit="Pa/m", low=0.0),
+        },
     },
     "supports": {
         "ends": {  # a beam's, at x = +-span / 2
@@ -171,7 +197,7 @@ KINDS: dict[str, dict[str, dict[str, Param]]] = {
 # the key naming a named table's kind, and its default (a single-kind table may leave it out)
 KIND_KEY = {"materials": ("kind", "ply"), "interfaces": ("kind", "hashin"), "impactors": ("shape", "cylinder"),
             "supports": ("at", "ends"), "probes": ("kind", None), "checks": ("closed_form", None),
-            "sheets": ("face", "bottom"), "loads": ("kind", "patch")}
+            "sheets": ("face", "bottom"), "loads": ("kind", "patch"), "delaminations": ("kind", "through_width")}
 
 LAMINATE = {
     "layup": Param(REQUIRED, "layup, bottom up: [ANGLE_COUNT/...] with an optional repeat and s (symmetric), "
@@ -192,7 +218,8 @@ SECTIONS: dict[str, dict[str, Param]] = {
                        "plate: a quarter of a rectangular plate, span along x and width along y, centred on x = y = 0; "
                        "disc: a quarter of a circular plate of diameter span, clamped at its rim; "
                        "bonded_beam: a plane-stress slice of a beam of one isotropic material with a sheet bonded "
-                       "to its bottom face; bonded_beam_3d: a quarter of it",
+                       "to its bottom face; bonded_beam_3d: a quarter of it; panel: a plane-stress slice of a laminate "
+                       "clamped at both ends and shortened axially, with one through-width delamination",
                        kind="str", choices=SHAPES),
         "laminate": Param("", "the laminate (a [laminates.*] name; beam, beam_3d, plate)", kind="str"),
         "material": Param("", "the body's material (an isotropic [materials.*] name; bonded beams)", kind="str"),
@@ -245,7 +272,53 @@ SECTIONS: dict[str, dict[str, Param]] = {
     },
     "coupling": {k.split(".", 1)[1]: v for k, v in COUPLING.items()},
 }
-COLLECTIONS = ("materials", "interfaces", "laminates", "sheets", "impactors", "loads", "supports", "probes", "checks")
+# a panel (a plane-stress slice of a laminate along x, y through the thickness, clamped at
+# x = 0 and x = span, shortened axially, with one through-width delamination): its own fields
+PANEL: dict[str, dict[str, Param]] = {
+    "geometry": {
+        "shape": SECTIONS["geometry"]["shape"],
+        "laminate": Param(REQUIRED, "the laminate (a [laminates.*] name)", kind="str"),
+        "span": positive(REQUIRED, "free length L between the clamped ends", "m"),
+        "width": positive(REQUIRED, "panel width b (the slice stands for all of it)", "m"),
+        "symmetry": Param("none", "none: the whole panel is modelled", kind="str", choices=("none",)),
+        "imperfection": Param(0.02, "initial bow of the panel in its clamped first mode / its thickness",
+                              low=1e-4, high=1.0),
+    },
+    "mesh": {
+        "element": Param("quad4", "element: quad4", kind="str", choices=("quad4",)),
+        "elements_along": Param(148, "elements along the panel", kind="int", low=20),
+        "elements_sublaminate": Param(3, "elements through the sublaminate", kind="int", low=1, high=20),
+        "elements_base": Param(6, "elements through the base laminate (below the delamination)", kind="int",
+                               low=1, high=40),
+    },
+    "fem": {
+        "integration": SECTIONS["fem"]["integration"],
+        "formulation": Param("total_lagrangian", "internal force path (buckling needs total_lagrangian)",
+                             kind="str", choices=FORMULATIONS),
+        "hypothesis": Param("plane_stress", "2D hypothesis (a panel's edges are free: plane stress)", kind="str",
+                            choices=("plane_stress", "plane_strain")),
+    },
+    "zone": {
+        "shape": Param("crack_tips", "crack_tips: a window of particles across the delamination plane at each "
+                       "tip (coupled mode)", kind="str", choices=("crack_tips",)),
+        "particle_size": Param(0.0, "lattice spacing d; 0: two plies, or half the thinner sublaminate if less (the "
+                               "window's four rows fit)", unit="m", low=0.0, plausible=(0.0, 1.0)),
+        "window_ahead": Param(0.0, "window ahead of each tip, into the intact laminate (room to grow); 0: the intact "
+                              "end less max(3 mm, a tenth of it), the room to the clamps", unit="m", low=0.0),
+        # behind the tip the window holds the film's lower half as two particle rows: 2 mm of it
+        # made the film's clamped ends 3 % softer (coupled elastic 5.75 kN against all-FEM 5.94 kN
+        # on the coarse mesh; 0.5 mm: 5.94 against 5.97 kN)
+        "window_behind": positive(0.5e-3, "window behind each tip, inside the delamination; also where the film "
+                                  "strain gauge stops short of the tips (both modes)", "m"),
+        "cohesive_zone_bonds": Param(20.0, "fewest bonds in the cohesive zone (strengths lowered to "
+                                     "sqrt(9 pi E22 Gc / (32 N d)), Turon et al. 2007); 0 keeps them",
+                                     low=0.0, high=50.0),
+    },
+}
+# a panel's ply is elastic (it buckles, it does not crack): its moduli and density only
+ELASTIC_PLY = {k: v for k, v in KINDS["materials"]["ply"].items() if k in ("E11", "E22", "G12", "nu12", "nu23", "rho")}
+COLLECTIONS = ("materials", "interfaces", "laminates", "sheets", "impactors", "loads", "supports", "delaminations",
+               "probes", "checks")
 META = {"description", "name", "t_end", "modes", "reference_elements", "no_fracture_reference"}
 MODES = ("coupled", "fem", "dem")
 
@@ -276,24 +349,29 @@ def parameters(data: dict, where: str, probe_kinds: dict, closed_forms: dict,
         raise CaseError(f"case.{sorted(extra)[0]}: unknown key in {where}; allowed: {', '.join(sorted(META))}")
     schema: dict[str, Param] = {}
     names: dict[str, dict[str, str]] = {c: {} for c in COLLECTIONS}
+    geometry = data.get("geometry", {})
+    panel = isinstance(geometry, dict) and geometry.get("shape") == "panel"
+    sections = {**SECTIONS, **PANEL} if panel else SECTIONS
     for table, body in data.items():
         if table in ("case", "ranges") or table in common:  # the run's own tables (clock, output, ...)
             continue
         if not isinstance(body, dict):
             raise CaseError(f"{table} = {body!r}: expected a table in {where}")
-        if table in SECTIONS:
-            schema.update(_fields(table, SECTIONS[table], body, where))
+        if table in sections:
+            schema.update(_fields(table, sections[table], body, where))
         elif table in COLLECTIONS:
             for name, entry in body.items():
                 if not isinstance(entry, dict):
                     raise CaseError(f"{table}.{name} = {entry!r}: expected a table [{table}.{name}] in {where}")
                 kind, fields = _kind(table, name, entry, probe_kinds, closed_forms)
+                if panel and (table, kind) == ("materials", "ply"):
+                    fields = {k: v for k, v in fields.items() if k == "kind" or k in ELASTIC_PLY}
                 names[table][name] = kind
                 schema.update(_fields(f"{table}.{name}", fields, entry, where))
         else:
             raise CaseError(f"[{table}]: unknown table in {where}; allowed: case, "
                             f"{', '.join([*COLLECTIONS, *SECTIONS, *sorted(common)])}")
-    for table, fields in SECTIONS.items():  # tables left out: their defaults (or a required key missing)
+    for table, fields in sections.items():  # tables left out: their defaults (or a required key missing)
         if table not in data:
             schema.update(_fields(table, fields, {}, where))
     layout = Layout(names, meta)
@@ -391,13 +469,17 @@ def document(probe_kinds: dict, closed_forms: dict) -> str:
                  "all of coupled, fem, dem), reference_elements (model_size_vs_reference), no_fracture_reference "
                  "(true: a coupled or all-DEM run also runs its all-FEM twin and reports each point displacement's "
                  "peak without fracture, peak_NAME_no_fracture and NAME_change_by_fracture)\n")
-    for collection in ("materials", "interfaces", "sheets", "impactors", "loads", "supports"):
+    for collection in ("materials", "interfaces", "sheets", "impactors", "loads", "supports", "delaminations"):
         key = KIND_KEY[collection][0]
         for kind, fields in KINDS[collection].items():
             table(f"[{collection}.NAME]  {key} = {kind!r}", fields)
     table("[laminates.NAME]", LAMINATE)
     for name, sec in SECTIONS.items():
         table(f"[{name}]", sec)
+    for name, sec in PANEL.items():
+        table(f"[{name}]  geometry.shape = 'panel'", sec)
+    lines.append("[materials.NAME]  kind = 'ply' with geometry.shape = 'panel': " + ", ".join(ELASTIC_PLY)
+                 + " (the plies do not crack)\n")
     for kind, probe in probe_kinds.items():
         table(f"[probes.NAME]  kind = {kind!r}: {probe.doc}", probe.fields)
     for kind, form in closed_forms.items():
