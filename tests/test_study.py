@@ -73,6 +73,52 @@ def test_old_and_structural_keys_are_refused_with_what_to_do(key, value, words):
     assert all(w in str(err.value) for w in words), str(err.value)
 
 
+PANEL = ROOT / "cases" / "seed" / "panel_buckling_coarse.toml"
+
+
+@pytest.mark.parametrize("old, new, words", [
+    ("modes = ", 't_end = 1e-3\nmodes = ["fem", "coupled"]', ["case.t_end", "duration_periods"]),
+    ("modes = ", 'modes = ["fem", "dem"]', ["case.modes", "leave dem out"]),
+    ("kind = \"shortening\"", 'kind = "patch"', ["loads.compression", "unknown key"]),
+    ("[delaminations.film]", "[delaminations.film]\nfriction = 0.2", ["delaminations.film.friction", "unknown key"]),
+    ("shape = \"crack_tips\"", 'shape = "box"', ["zone.shape", "'crack_tips'"]),
+    ("condition = ", 'condition = "simply_supported"', ["supports.ends.condition", "clamped"]),
+    ("layup = ", 'layup = "[0_20]"\nfar_field_interfaces = "cohesive"', ["far_field_interfaces", "no effect"]),
+    ("E11 = ", "E11 = 139.2e9\nXt = 1.5e9", ["materials.table2.Xt", "unknown key"]),
+    ("sublaminate_plies = ", "sublaminate_plies = 20", ["sublaminate_plies = 20", "below"]),
+])
+def test_a_bad_panel_is_refused_in_one_line(tmp_path, old, new, words):
+    """The panel study's own tables: a run that lasts its load, fem and coupled modes, one
+    shortening load, a through-width delamination, elastic plies, clamped ends."""
+    from coupling.case import load_case
+    from coupling.params import CaseError
+    lines = PANEL.read_text().splitlines()
+    hit = [i for i, line in enumerate(lines) if line.startswith(old)]
+    assert hit, old
+    lines[hit[0]] = new
+    path = tmp_path / "panel.toml"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(CaseError) as err:
+        case = load_case(str(path))
+        case.scene.build(case.parameters, "fem", "")  # (what only the assembler can say)
+    line = str(err.value)
+    assert "\n" not in line and all(w in line for w in words), line
+
+
+@pytest.mark.parametrize("key, words", [
+    ("geometry.delamination_length", ["renamed", "delaminations.film.length"]),
+    ("load.duration_periods", ["renamed", "loads.compression.duration_periods"]),
+    ("material.E11", ["renamed", "materials.table2.E11"]),
+    ("interface.eta", ["unknown key"]),  # the B-K exponent is the law's (no study sets it)
+])
+def test_the_panel_scenes_keys_are_refused_with_their_new_names(key, words):
+    from coupling.case import load_case
+    from coupling.params import CaseError
+    with pytest.raises(CaseError) as err:
+        load_case(str(PANEL), {key: "1"})
+    assert all(w in str(err.value) for w in words), str(err.value)
+
+
 def test_a_bad_study_exits_2_before_anything_is_written(tmp_path):
     path = tmp_path / "study.toml"
     path.write_text(study_text(**{"E22 = ": ""}))
@@ -87,9 +133,9 @@ def test_the_schema_is_documented_and_docs_cases_md_is_its_output():
     """`femdem schema` names every table and key the assembler reads; docs/cases.md is that
     text (regenerate: femdem schema > docs/cases.md, inside its fence)."""
     from coupling.study import document_schema
-    from coupling.study.schema import KINDS, LAMINATE, SECTIONS
+    from coupling.study.schema import KINDS, LAMINATE, PANEL, SECTIONS
     text = document_schema()
-    for fields in [*SECTIONS.values(), LAMINATE, *(f for kinds in KINDS.values() for f in kinds.values())]:
+    for fields in [*SECTIONS.values(), *PANEL.values(), LAMINATE, *(f for kinds in KINDS.values() for f in kinds.values())]:
         for key in fields:
             assert f"  {key} = " in text, key
     assert text in (ROOT / "docs" / "cases.md").read_text()
@@ -140,6 +186,34 @@ def test_the_coupled_study_equals_its_all_fem_beam(femdem):
         peaks[mode] = s["qoi"]["peak_deflection"]
         assert s["qoi"].get("delamination_length_0", 0.0) == 0.0
     assert abs(peaks["coupled"] / peaks["fem"] - 1) < 0.03
+
+
+def punch_study(tmp_path, half_width: float = 3e-3):
+    """The three-point bend struck by a flat punch of that half width instead of the cylinder."""
+    path = tmp_path / "punch.toml"
+    path.write_text(study_text(**{"radius = 4e-3": f'shape = "flat_punch"\nhalf_width = {half_width}'}))
+    return path
+
+
+@pytest.mark.parametrize("mode", ["fem", "coupled", "dem"])
+def test_a_flat_punch_bends_the_beam_as_the_spring_mass_estimate_says(femdem, tmp_path, mode):
+    """A flat punch (impactors.*.shape = "flat_punch", 2D beams) on the FEM nodes, on the
+    particles (its face grown by their radius) and on both: the peak deflection within the
+    study's 15 % of the spring-mass estimate (the punch's shape does not enter it), the energy
+    ledger closed, the punch pushing down on the beam."""
+    code, s, err = femdem("run", str(punch_study(tmp_path)), "--mode", mode)
+    assert code == 0, err
+    assert all(c["passed"] for c in s["checks"].values()), s["checks"]
+    assert s["qoi"]["peak_contact_force"] > 0
+
+
+def test_a_punch_wider_than_the_zone_is_refused(tmp_path):
+    from coupling.case import load_case
+    from coupling.params import CaseError
+    case = load_case(str(punch_study(tmp_path, half_width=6e-3)))
+    with pytest.raises(CaseError) as err:
+        case.scene.build(case.parameters, "coupled", "liggghts")
+    assert "impactors.striker.half_width" in str(err.value) and "zone.half_width" in str(err.value)
 
 
 @settings(max_examples=2, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.generate],

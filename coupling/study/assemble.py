@@ -198,6 +198,11 @@ def beam(study, p: dict, mode: str, dem: str):
     if mode == "coupled" and not 2 * t < w < 0.8 * L:
         raise CaseError(f"zone.half_width = {w:g}: allowed between two particle sizes ({2 * t:g} m) and 0.8 x "
                         "half the span")
+    for name in study.layout.names["impactors"]:  # a punch's face stays on the particles
+        hw = p.get(f"impactors.{name}.half_width", 0.0)
+        if mode == "coupled" and hw > w - 2 * t:
+            raise CaseError(f"impactors.{name}.half_width = {hw:g}: the face must stay on the DEM zone; allowed <= "
+                            f"zone.half_width - 2 particle sizes = {w - 2 * t:g} m")
     clamp = _support(study, p) == "clamped"
     zone = _particle_block if dim == 3 else _particle_zone
     lat, scene, intra, inter = zone(built, w, tied=(mode == "coupled"), clamped=(mode == "dem" and clamp))
@@ -374,6 +379,11 @@ def _fem_beam(study, p: dict, built: Built, t_end: float):
                                        (q["penalty"] or built.lam.ply["E22"] * d) * share_x * share_y,
                                        friction=q["friction"],
                                        axis=np.array([0.0, 1.0, 0.0]))
+        elif study.layout.names["impactors"][name] == "flat_punch":  # its face just above the top face
+            k_pen = (q["penalty"] or built.lam.transverse_modulus() * d) * share_x
+            imps[name] = RigidImpactor("flat_punch", np.array([0.0, H + 1e-9]), q["half_width"],
+                                       0.5 * q["mass_per_width"] * d, np.array([0.0, -q["velocity"]]), k_pen,
+                                       friction=q["friction"], axis=np.array([0.0, 1.0]))
         else:
             k_pen = (q["penalty"] or built.lam.transverse_modulus() * d) * share_x
             imps[name] = RigidImpactor("cylinder", np.array([0.0, H + q["radius"] + 1e-9]), q["radius"],
@@ -479,8 +489,8 @@ def _block_with_laws(built: Built, columns: tuple[int, int], half: list):
 
 
 def _particle_impactor(p: dict, name: str, built: Built) -> ParticleImpactor:
-    """The part of the cylinder the symmetry planes leave (a half in 2D, a quarter in 3D) on the
-    top rows, moving only vertically."""
+    """The part of the cylinder (or, 2D, the flat punch) the symmetry planes leave (a half in 2D,
+    a quarter in 3D) on the top rows, moving only vertically."""
     q, lat, d = section(p, f"impactors.{name}"), built.lattice, built.t
     if built.dim == 3:
         H, R, r = built.lam.thickness, q["radius"], lat.radius
@@ -490,9 +500,15 @@ def _particle_impactor(p: dict, name: str, built: Built) -> ParticleImpactor:
                             q["penalty"] or built.lam.ply["E22"] * d, friction=q["friction"],
                             axis=np.array([0.0, 1.0, 0.0]))
         return ParticleImpactor(cyl, top, fixed=(True, True, False))
-    R, r, H = q["radius"], lat.radius, built.lam.thickness
+    r, H = lat.radius, built.lam.thickness
     k_pen = q["penalty"] or built.lam.transverse_modulus() * d
     top = np.flatnonzero(lat.row >= lat.row.max() - 1)
+    if "half_width" in q:  # a flat punch: its face grown by the particle radius meets the top centres
+        punch = RigidImpactor("flat_punch", np.array([0.0, H + 1e-9, 0.0]), q["half_width"],
+                              0.5 * q["mass_per_width"] * d, np.array([0.0, -q["velocity"], 0.0]), k_pen,
+                              friction=q["friction"], axis=np.array([0.0, 1.0, 0.0]), rounding=r)
+        return ParticleImpactor(punch, top, fixed=(True, False, True))
+    R = q["radius"]
     imp = RigidImpactor("sphere", np.array([0.0, H - d / 2 + R + r + 1e-9, 0.0]), R + r, 0.5 * q["mass_per_width"] * d,
                         np.array([0.0, -q["velocity"], 0.0]), k_pen, friction=q["friction"])
     return ParticleImpactor(imp, top, fixed=(True, False, True))

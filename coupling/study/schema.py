@@ -29,7 +29,8 @@ Sections (one concept, one key):
 - supports.*:   at "ends" (a beam's, x = +-span / 2), "edges" (a plate's) or "rim" (a disc's),
                 condition clamped or simply_supported
 - impactors.*:  shape "cylinder" (a beam's, along its width, on the top face at x = 0: radius,
-                mass_per_width, velocity, penalty, friction) or "sphere" (a plate's, on its centre:
+                mass_per_width, velocity, penalty, friction) or "flat_punch" (a 2D beam's: a
+                flat face of half_width, otherwise as the cylinder) or "sphere" (a plate's, on its centre:
                 radius, mass, velocity, penalty, friction) or "rod" (a disc's, flat-faced, on its
                 centre: radius, length, rho, velocity, penalty per area)
 - loads.*:      kind "patch" (a bonded beam's: a force history on its top face about x = 0, as
@@ -130,6 +131,14 @@ KINDS: dict[str, dict[str, dict[str, Param]]] = {
             "velocity": positive(REQUIRED, "impact speed (downwards, on the top face at the centre)", "m/s"),
             "penalty": positive(REQUIRED, "contact penalty per area (Pa/m): a FEM node gets it times its tributary "
                                 "area, a particle times d^2", "Pa/m"),
+        },
+        "flat_punch": {  # a 2D beam's: a flat strip face across the width, on the top face at x = 0
+            "half_width": positive(REQUIRED, "half the punch's face length along the beam", "m"),
+            "mass_per_width": positive(REQUIRED, "mass per metre of width", "kg/m"),
+            "velocity": positive(REQUIRED, "impact speed (downwards, on the top face at x = 0)", "m/s"),
+            "penalty": Param(0.0, "contact penalty per particle / node; 0 = the lattice's transverse bond "
+                             "stiffness E_y t", unit="N/m", low=0.0),
+            "friction": Param(0.2, "impactor friction", low=0.0, high=2.0),
         },
         "cylinder": {
             "radius": positive(REQUIRED, "cylinder radius", "m"),
