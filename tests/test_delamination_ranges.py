@@ -44,7 +44,7 @@ def run_in_domain(femdem, case, sets):
     overrides = parse_set([a.split("=", 1)[1] for a in sets if a.startswith("--set=")])
     try:
         c = load_case(case, overrides)
-        warnings = c.scene.validity(c.parameters)
+        warnings = c.scene.validity(c.parameters, sets[sets.index("--mode") + 1] if "--mode" in sets else "coupled")
     except CaseError:
         assume(False)
     assume(not any(key in w for w in warnings for key in OUTSIDE))
@@ -103,6 +103,35 @@ def test_mixed_mode_holds_over_its_ranges(femdem, m, h, L_rel, a_rel, substeps, 
     """SLB: initiation against the B-K toughness at the beam-theory mode ratio, compliance,
     dissipation = Gc(B) x crack area."""
     s = run_in_domain(femdem, "mixed_mode_coarse", bending_sets(m, h, L_rel, a_rel, substeps, r))
+    assert_checks(s)
+
+
+def fem_sets(case, m, h, L_rel, a_rel, dcb_a, r):
+    """A specimen's sets for --mode fem (no substeps: there is no DEM zone)."""
+    sets = dcb_sets(m, h, dcb_a, 0, r) if case == "dcb_coarse" else bending_sets(m, h, L_rel, a_rel, 0, r)
+    # the node spacing is the FEM's element length (the particles' 2 r in the coupled draws)
+    sets = [a.replace("zone.particle_size", "mesh.element_length") for a in sets if "clock.substeps" not in a]
+    return sets + ["--mode", "fem"]
+
+
+@pytest.mark.parametrize("case", ["dcb_coarse", "enf_coarse", "mixed_mode_coarse"])
+@COARSE
+@given(m=MATERIAL, h=THICK, L_rel=st.floats(1.2, 2.0), a_rel=st.floats(0.4, 0.6), dcb_a=st.floats(1.0, 1.6), r=RADIUS)
+def test_all_fem_specimens_hold_over_their_ranges(femdem, case, m, h, L_rel, a_rel, dcb_a, r):
+    """All-FEM (issue #24): the arms meshed apart along the crack plane and joined node to node
+    by the same law (the far field's cohesive interface), node spacing d: the same closed forms
+    at the same tolerances as the coupled specimen, anywhere in its ranges."""
+    s = run_in_domain(femdem, case, fem_sets(case, m, h, L_rel, a_rel, dcb_a, r))
+    assert_checks(s)
+    assert s["counts"]["particles"] == 0 and s["counts"]["interface_bonds"] > 0
+
+
+@pytest.mark.slow
+@WIDE
+@given(case=st.sampled_from(["dcb_coarse", "enf_coarse", "mixed_mode_coarse"]), m=MATERIAL, h=THICK,
+       L_rel=st.floats(1.2, 2.5), a_rel=st.floats(0.4, 0.6), dcb_a=st.floats(1.0, 2.0), r=RADIUS)
+def test_all_fem_specimens_hold_over_wider_draws(femdem, case, m, h, L_rel, a_rel, dcb_a, r):
+    s = run_in_domain(femdem, case, fem_sets(case, m, h, L_rel, a_rel, dcb_a, r))
     assert_checks(s)
 
 

@@ -19,11 +19,11 @@ import numpy as np
 from ..checks import bound, check
 from ..params import CaseError, Param
 from . import delamination as dl
-from ..participants.coupled import COUPLING, coupled_simulation
+from ..participants.coupled import COUPLING
 
 NAME = "dcb"
 DESCRIPTION = "coupled: DCB mode I delamination, load-opening vs corrected beam theory"
-MODES = ("coupled",)
+MODES = ("coupled", "fem")
 PARAMETERS = {
     **dl.PARAMETERS,
     "geometry.crack_length": dl.ranged(32.9e-3, "initial crack length a0 from the load line, at least 8 h", "m",
@@ -51,19 +51,20 @@ def propagation_load(cf: dict, delta: np.ndarray) -> np.ndarray:
     return cf["S"] ** 1.5 * np.sqrt(8 / (np.asarray(delta) * cf["Ebh3"]))
 
 
-def validity(p: dict) -> list[str]:
-    """The specimen's domain: raises CaseError for what it cannot model (particles too coarse
-    for the arms, a crack too short for beam theory, a crack path that leaves the specimen,
-    strengths linear softening cannot start from); returns the warnings of what it models
-    with a compromise."""
-    return domain(p)[1]
+def validity(p: dict, mode: str = "coupled") -> list[str]:
+    """The specimen's domain in ``mode``: raises CaseError for what it cannot model (particles
+    too coarse for the arms, a crack too short for beam theory, a crack path that leaves the
+    specimen, strengths linear softening cannot start from); returns the warnings of what it
+    models with a compromise."""
+    return domain(p, mode)[1]
 
 
-def domain(p: dict) -> tuple[tuple[float, float], list[str]]:
+def domain(p: dict, mode: str = "coupled") -> tuple[tuple[float, float], list[str]]:
     """((x_a, x_b) the DEM window in m, warnings), or CaseError: see validity."""
-    dl.check_resolution(p)
+    if mode == "coupled":
+        dl.check_resolution(p)
     cf = closed_form(p)
-    return window(p, cf, final_crack_length(p, cf)), dl.strength_warnings(p, p["zone.particle_size"])
+    return window(p, cf, final_crack_length(p, cf)), dl.strength_warnings(p, dl.bond_spacing(p, mode))
 
 
 def final_crack_length(p: dict, cf: dict) -> float:
@@ -100,9 +101,9 @@ def build(p: dict, mode: str, dem: str):
     h = p["geometry.arm_thickness"]
     delta_end = p["load.final_opening_factor"] * cf["delta_peak"]
     a0 = p["geometry.crack_length"]
-    (x_a, x_b), warnings = domain(p)
+    (x_a, x_b), warnings = domain(p, mode)
     omega = dl.cantilever_omega(p, a0)
-    spec = dl.build_specimen(p, a0, x_a, x_b, omega)
+    spec = dl.specimen(p, mode, a0, x_a, x_b, omega)
     t_load = p["load.duration_periods"] * 2 * np.pi / omega
     t_ramp = p["load.ramp_time"] or 2 * 2 * np.pi / omega
     v0 = 0.5 * delta_end / (t_load - 0.5 * t_ramp)  # per arm; the ramp's lost distance made up
@@ -116,9 +117,8 @@ def build(p: dict, mode: str, dem: str):
     pin = np.flatnonzero((np.abs(X[:, 0] - X[:, 0].max()) < 1e-9) & (np.abs(X[:, 1] - h) < 1e-9 * h))[:1]
     up, down = 2 * spec.upper_end + 1, 2 * spec.lower_end + 1
     supports = [PrescribedMotion(up, speed), PrescribedMotion(down, lambda t: -speed(t)), PrescribedMotion(2 * pin)]
-    make = dl.fem_factory(spec, supports, dl.damping_alpha(p, omega))
-    sim, clock = coupled_simulation(p, make, spec.scene, dem, t_load, models=(spec.bonds,))
-    fem, bonds, wf = clock.fem, spec.bonds, spec.width_factor
+    sim, fem, bonds = dl.simulate(p, mode, dem, spec, supports, dl.damping_alpha(p, omega), t_load)
+    wf = spec.width_factor
     sim.probes.update({
         "load": lambda: wf * fem.reaction(up),
         "opening": lambda: float(fem.state.u[spec.upper_end, 1].mean() - fem.state.u[spec.lower_end, 1].mean()),
@@ -136,16 +136,17 @@ def evaluate(p: dict, h: dict, mode: str):
     P, delta = np.asarray(h["load"]), np.asarray(h["opening"])
     tip, D = np.asarray(h["crack_tip"]), np.asarray(h["interface_dissipated"])
     k = dl.peak_before_growth(P, tip, p["geometry.crack_length"], 1e-3)
-    Z0, R0 = dl.resolved_strengths(p, p["zone.particle_size"])
+    d = dl.bond_spacing(p, mode)
+    Z0, R0 = dl.resolved_strengths(p, d)
     qoi = {"Z0_used": Z0, "R0_used": R0, "peak_load": float(P[k]), "opening_at_peak": float(delta[k])}
     qoi["initial_compliance"] = dl.initial_compliance(P, delta, k, 0.4)
-    qoi.update(dl.cohesive_zone_qoi(p, h, k, p["interface.GIc"], Z0, "I"))
+    qoi.update(dl.cohesive_zone_qoi(p, h, k, p["interface.GIc"], Z0, "I", d))
     branch = (delta > 1.15 * cf["delta_peak"]) & (np.arange(len(P)) > k)
     rel = P[branch] / propagation_load(cf, delta[branch]) - 1
     qoi["propagation_rms_error"] = float(np.sqrt(np.mean(rel**2))) if rel.size else float("nan")
     # steady growth on the propagation branch
     qoi["crack_growth"], qoi["dissipated_energy_ratio"] = dl.growth_and_dissipation(p, tip, D, branch,
-                                                                                     p["interface.GIc"])
+                                                                                     p["interface.GIc"], d)
     src = "corrected beam theory (Hashemi, Kinloch & Williams 1990)"
     checks = {
         "peak_load": check(qoi["peak_load"], cf["P_peak"], 0.05, src + ": P = sqrt(GIc b^2 h^3 E11 / 12) / (a0 + chi h)"),
@@ -162,7 +163,7 @@ def plot(p: dict, h: dict, qoi: dict, plots_dir):
     cf = closed_form(p)
     delta = np.asarray(h["opening"])
     fig, ax = plt.subplots(1, 2, figsize=(10, 4))
-    ax[0].plot(1e3 * delta, h["load"], label="coupled (FEM arms + DEM crack path)")
+    ax[0].plot(1e3 * delta, h["load"], label="this run")
     d_el = np.linspace(0, cf["delta_peak"], 20)
     d_pr = np.linspace(cf["delta_peak"], max(delta.max(), cf["delta_peak"] * 1.01), 50)
     ax[0].plot(1e3 * np.concatenate([d_el, d_pr]), np.concatenate([d_el / cf["C0"], propagation_load(cf, d_pr)]),

@@ -1,4 +1,6 @@
-"""Split-beam specimens (DCB, ENF) as coupled problems: FEM arms, the crack path as DEM.
+"""Split-beam specimens (DCB, ENF, SLB) as coupled problems: FEM arms, the crack path as DEM;
+and all-FEM (``--mode fem``: the arms meshed apart along the crack plane, joined node to node by
+the same law, the far field's cohesive interface; cohesive_specimen).
 
 Geometry (plane stress slice of thickness t = d, the particle spacing; every force is
 reported for the whole width b by the factor b / t, exact for this linear-in-thickness model):
@@ -41,7 +43,8 @@ from fem_region import materials, mesh
 from fem_region.explicit import ExplicitDynamics
 
 from ..params import CaseError, Param
-from ..participants.fem import FEM_OPTIONS, make_region
+from ..participants.coupled import coupled_simulation
+from ..participants.fem import FEM_OPTIONS, cohesive_node_bonds, energies_with, fem_only, make_region
 
 def ranged(default: float, doc: str, unit: str, low: float, high: float) -> Param:
     """A parameter inside the range over which the specimens are verified (tests/test_delamination_ranges.py
@@ -74,7 +77,8 @@ PARAMETERS: dict[str, Param] = {
     "interface.friction": Param(0.0, "Coulomb friction of debonded faces in contact", low=0.0, high=1.0),
     "zone.particle_size": ranged(0.26e-3, "DEM particle size d (the lattice spacing), at most h / 6", "m", 100e-6, 1e-3),
     "mesh.elements_through": Param(3, "FEM elements through each arm outside the band", kind="int", low=1, high=40),
-    "mesh.element_length": Param(0.0, "FEM element length along the beam; 0 = 2 d", unit="m", low=0.0),
+    "mesh.element_length": Param(0.0, "FEM element length along the beam; 0 = 2 d (coupled: the arms), d (fem: "
+                                 "the node pairs resolve the cohesive zone as the particles do)", unit="m", low=0.0),
     "load.ramp_time": Param(0.0, "time over which the load-point speed ramps up; 0 = two periods of the "
                             "cracked arm", unit="s", low=0.0),
     **{k: v for k, v in FEM_OPTIONS.items() if k not in ("mesh.element", "fem.hypothesis")},
@@ -105,16 +109,21 @@ def chi_of(E11: float, E22: float, G13: float) -> float:
 @dataclass
 class Specimen:
     """What a split-beam scene needs: the FEM factory, the DEM scene, the law bonds and the
-    node sets (flat x / y DOF indices) for supports and loads."""
+    node sets (flat x / y DOF indices) for supports and loads. All-FEM (cohesive_specimen): no
+    scene; the bonds join the node ``pairs`` (k, 2) lower / upper on the crack plane, each
+    standing for ``pair_area`` (k,) m^2, once the FEM exists (``simulate``)."""
 
-    scene: DemScene
-    bonds: LawBonds
+    scene: DemScene | None
+    bonds: LawBonds | None
     t: float  # slice thickness, m
     width_factor: float  # b / t
     region: object
     upper_end: np.ndarray  # nodes of the upper arm's face x = 0
     lower_end: np.ndarray
     omega_arm: float  # first bending mode of the loaded (cracked) arm, rad/s
+    pairs: np.ndarray | None = None
+    pair_area: np.ndarray | None = None
+    a0: float = 0.0  # m, the initial crack: bonds behind it start debonded
 
 
 def slice_ply(p: dict) -> np.ndarray:
@@ -177,6 +186,85 @@ def build_specimen(p: dict, a0: float, x_a: float, x_b: float, omega_arm: float,
     return Specimen(scene=scene, bonds=bonds, t=t, width_factor=p["geometry.width"] / t,
                     region=region, upper_end=np.flatnonzero(end & above), lower_end=np.flatnonzero(end & ~above),
                     omega_arm=omega_arm)
+
+
+def bond_spacing(p: dict, mode: str) -> float:
+    """m, the spacing of the bonds across the crack plane: the particles' (coupled) or the FEM
+    nodes' along it (fem: mesh.element_length, 0 = d, the particles' resolution of the cohesive
+    zone: 2 d put the full DCB's peak 12.7 % above beam theory, d 3.9 %)."""
+    return p["zone.particle_size"] if mode == "coupled" else p["mesh.element_length"] or p["zone.particle_size"]
+
+
+def specimen(p: dict, mode: str, a0: float, x_a: float, x_b: float, omega_arm: float,
+             stations: tuple[float, ...] = ()) -> Specimen:
+    """The specimen of ``mode``: coupled (build_specimen: FEM arms, the DEM window [x_a, x_b])
+    or fem (cohesive_specimen)."""
+    if mode == "coupled":
+        return build_specimen(p, a0, x_a, x_b, omega_arm, stations)
+    return cohesive_specimen(p, a0, omega_arm, stations)
+
+
+def cohesive_specimen(p: dict, a0: float, omega_arm: float, stations: tuple[float, ...] = ()) -> Specimen:
+    """All-FEM: both arms meshed apart along the crack plane y = h over the whole length, their
+    coincident nodes joined by the same law as the particles' (the far field's cohesive
+    interface, participants.fem.cohesive_node_bonds), debonded behind a0. Elements of
+    bond_spacing along, mesh.elements_through through each arm; each node pair stands for its
+    tributary length of the plane."""
+    h, L = p["geometry.arm_thickness"], p["geometry.length"]
+    d, ex = p["zone.particle_size"], bond_spacing(p, "fem")
+    if p["material.G13"] >= p["material.E22"]:  # (the same domain as the coupled specimen)
+        raise CaseError(f"material.G13 = {p['material.G13']:g}: allowed below material.E22 = {p['material.E22']:g} Pa")
+    breaks = np.unique(np.concatenate([[0.0, L], [x for x in stations if 0.0 < x < L]]))
+    xs = np.unique(np.concatenate([np.linspace(a, b, max(1, int(np.ceil((b - a) / ex - 1e-9))) + 1)
+                                   for a, b in zip(breaks[:-1], breaks[1:])]))
+    nt = p["mesh.elements_through"]
+    ys = np.unique(np.concatenate([np.linspace(0, h, nt + 1), np.linspace(h, 2 * h, nt + 1)]))
+    tol = 1e-9 * L
+    m = mesh.cut_rectangle(xs, ys, lambda cx, cy: True, crack_y=h, crack_x_max=L)
+    region = make_region(m, p, slice_ply(p), p["material.rho"], d)
+    X = region.X
+    cells_above = region.mesh.t[:, X[region.mesh.t, 1].mean(axis=0) > h]
+    above = np.zeros(region.n_nodes, bool)
+    above[np.unique(cells_above)] = True
+    on = np.flatnonzero(np.abs(X[:, 1] - h) < tol)
+    lower, upper = on[~above[on]], on[above[on]]
+    lower, upper = lower[np.argsort(X[lower, 0])], upper[np.argsort(X[upper, 0])]
+    x = X[lower, 0]
+    edges = np.concatenate([[x[0]], 0.5 * (x[1:] + x[:-1]), [x[-1]]])
+    end = X[:, 0] < tol
+    return Specimen(scene=None, bonds=None, t=d, width_factor=p["geometry.width"] / d, region=region,
+                    upper_end=np.flatnonzero(end & above), lower_end=np.flatnonzero(end & ~above),
+                    omega_arm=omega_arm, pairs=np.column_stack([lower, upper]), pair_area=np.diff(edges) * d, a0=a0)
+
+
+def simulate(p: dict, mode: str, dem: str, spec: Specimen, supports, alpha: float, t_end: float):
+    """(Simulation, FEM participant, the crack plane's LawBonds) of a specimen: coupled (the DEM
+    window's bonds on the particles) or fem (the node pairs' bonds: penalty 50 E22 / h, Turon
+    et al. 2007's alpha = 50 against the arm, or less where it would lower the elements' stable
+    step by more than 11 %, the step of both together; strengths by resolved_strengths on the
+    node spacing)."""
+    if mode == "coupled":
+        sim, clock = coupled_simulation(p, fem_factory(spec, supports, alpha), spec.scene, dem, t_end,
+                                        models=(spec.bonds,))
+        return sim, clock.fem, spec.bonds
+    dyn = ExplicitDynamics(spec.region, supports=supports, alpha=alpha)
+    pairs, area = spec.pairs, spec.pair_area
+    dt_el = dyn.region.critical_dt(dyn.density_scale)
+    m_pair = np.minimum(dyn.m[pairs[:, 0]], dyn.m[pairs[:, 1]])
+    # a pair's spring adds to its nodes' elements (Gershgorin: omega^2 = omega_el^2 + 4 K A / m):
+    # at a quarter of m / (A dt_el^2) it lowers the elements' step by 11 % at most
+    K = min(50 * p["material.E22"] / p["geometry.arm_thickness"], 0.25 * float(np.min(m_pair / area)) / dt_el**2)
+    Z0, R0 = resolved_strengths(p, bond_spacing(p, mode))
+    law = HashinCohesiveLaw(K=K, Z0=Z0, R0=R0, GIc=p["interface.GIc"], GIIc=p["interface.GIIc"],
+                            eta=p["interface.eta"], mixed_mode=p["interface.mixed_mode"])
+    bonds = cohesive_node_bonds(dyn, pairs, area, law, p["interface.friction"])
+    dyn.critical_dt_extra = float(2.0 / np.sqrt((2.0 / dt_el) ** 2 + np.max(4 * K * area / m_pair)))
+    behind = dyn.region.X[pairs[:, 0], 0] < spec.a0 - 1e-9 * p["geometry.length"]
+    bonds.damage[behind], bonds.t_failed[behind] = 1.0, 0.0  # the initial crack: faces in contact only
+    sim = fem_only(dyn, p, t_end, {})
+    sim.energies = energies_with(sim.energies, [bonds])
+    sim.counts["interface_bonds"] = len(pairs)
+    return sim, dyn, bonds
 
 
 @dataclass
@@ -317,10 +405,10 @@ def softening_bonds(bonds: LawBonds) -> float:
     return float(np.count_nonzero((bonds.damage > 0.0) & (bonds.damage < 1.0)))
 
 
-def cohesive_zone_qoi(p: dict, h: dict, k: int, Gc: float, tau: float, mode: str) -> dict:
+def cohesive_zone_qoi(p: dict, h: dict, k: int, Gc: float, tau: float, mode: str, d: float) -> dict:
     """The cohesive zone in bonds: measured (the most pairs softening at once up to the peak
-    load, sample k, when the zone has formed) and estimated (cohesive_zone_length / d)."""
-    d = p["zone.particle_size"]
+    load, sample k, when the zone has formed) and estimated (cohesive_zone_length / d, d the
+    bonds' spacing m)."""
     zone = np.asarray(h.get("cohesive_zone_bonds", [np.nan]))[: k + 1]
     return {"cohesive_zone_bonds": float(np.max(zone)) if zone.size else float("nan"),
             "cohesive_zone_bonds_estimate": cohesive_zone_length(p, Gc, tau, mode) / d}
@@ -340,13 +428,14 @@ def initial_compliance(P: np.ndarray, delta: np.ndarray, k: int, upto: float) ->
     return float(np.polyfit(P[early], delta[early], 1)[0]) if early.sum() > 3 else float("nan")
 
 
-def growth_and_dissipation(p: dict, tip: np.ndarray, D: np.ndarray, after: np.ndarray, Gc: float) -> tuple[float, float]:
+def growth_and_dissipation(p: dict, tip: np.ndarray, D: np.ndarray, after: np.ndarray, Gc: float,
+                           d: float) -> tuple[float, float]:
     """(crack growth m, dissipated energy per new crack area / Gc): the slope of the interface's
     dissipation against the debonded area b x tip over the samples ``after`` (bool) where the
-    crack has run more than 8 particle radii (the process zone has formed)."""
+    crack has run more than 4 bond spacings d (m; the process zone has formed)."""
     a0 = p["geometry.crack_length"]
     growth = float(np.nanmax(tip) - a0) if np.isfinite(tip).any() else 0.0
-    grow = after & np.isfinite(tip) & (tip > a0 + 4 * p["zone.particle_size"])
+    grow = after & np.isfinite(tip) & (tip > a0 + 4 * d)
     if grow.sum() > 3 and np.ptp(tip[grow]) > 0:
         return growth, float(np.polyfit(p["geometry.width"] * tip[grow], D[grow], 1)[0] / Gc)
     return growth, float("nan")

@@ -27,11 +27,11 @@ from fem_region.explicit import PrescribedMotion
 from ..checks import check
 from ..params import CaseError, Param
 from . import delamination as dl
-from ..participants.coupled import COUPLING, coupled_simulation
+from ..participants.coupled import COUPLING
 
 NAME = "enf"
 DESCRIPTION = "coupled: ENF mode II delamination, peak load vs beam theory"
-MODES = ("coupled",)
+MODES = ("coupled", "fem")
 PARAMETERS = {
     **dl.PARAMETERS,
     # mode II: the cohesive zone must stay short against a0 and the ligament L - a0 (a zone
@@ -68,12 +68,13 @@ def beam_omega(p: dict) -> float:
 
 
 def build(p: dict, mode: str, dem: str):
-    return bending_specimen(p, dem, closed_form(p), single_leg=False, warnings=validity(p))
+    return bending_specimen(p, mode, dem, closed_form(p), single_leg=False, warnings=validity(p, mode))
 
 
-def validity(p: dict, mode: str = "II", share: float = 0.3) -> list[str]:
-    """The specimen's domain: raises CaseError for a geometry it cannot model; returns the
-    warnings of what it models with a compromise or outside its closed form's validity."""
+def validity(p: dict, mode: str = "coupled", fracture: str = "II", share: float = 0.3) -> list[str]:
+    """The specimen's domain in ``mode``: raises CaseError for a geometry it cannot model;
+    returns the warnings of what it models with a compromise or outside its closed form's
+    validity (the cohesive zone of ``fracture`` mode against ``share`` of the crack)."""
     L, a0, h = p["geometry.half_span"], p["geometry.crack_length"], p["geometry.arm_thickness"]
     if 2 * L > p["geometry.length"] + 1e-12:
         raise CaseError(f"geometry.half_span = {L:g}: the span 2L is longer than geometry.length = "
@@ -85,16 +86,18 @@ def validity(p: dict, mode: str = "II", share: float = 0.3) -> list[str]:
     if L < 8 * h:
         raise CaseError(f"geometry.half_span = {L:g}: shorter than 8 arm thicknesses (8 h = {8 * h:g} m): not a "
                         "beam; allowed >= 8 h")
-    dl.check_resolution(p)
-    return dl.strength_warnings(p, p["zone.particle_size"]) + bending_warnings(p, mode, share)
+    if mode == "coupled":
+        dl.check_resolution(p)
+    d = dl.bond_spacing(p, mode)
+    return dl.strength_warnings(p, d) + bending_warnings(p, fracture, share, d)
 
 
-def bending_specimen(p: dict, dem: str, cf: dict, single_leg: bool, warnings: list[str]):
+def bending_specimen(p: dict, mode: str, dem: str, cf: dict, single_leg: bool, warnings: list[str]):
     """Three-point bending of the split beam: ENF (both arms on the left support) or single
     leg bending (only the upper arm on it, so the lower arm's cracked part carries no load)."""
     L, a0, h = p["geometry.half_span"], p["geometry.crack_length"], p["geometry.arm_thickness"]
     omega = beam_omega(p)
-    spec = dl.build_specimen(p, a0, 0.0, L + p["dem.margin"], omega, stations=(L, 2 * L))
+    spec = dl.specimen(p, mode, a0, 0.0, L + p["dem.margin"], omega, stations=(L, 2 * L))
     t_load = p["load.duration_periods"] * 2 * np.pi / omega
     t_ramp = p["load.ramp_time"] or 2 * 2 * np.pi / omega
     v0 = p["load.final_deflection_factor"] * cf["delta_peak"] / (t_load - 0.5 * t_ramp)
@@ -116,9 +119,8 @@ def bending_specimen(p: dict, dem: str, cf: dict, single_leg: bool, warnings: li
     right = np.flatnonzero(bottom & (np.abs(X[:, 0] - 2 * L) < tol))
     supports = [PrescribedMotion(2 * punch + 1, speed), PrescribedMotion(2 * punch[:1]),
                 PrescribedMotion(np.concatenate([2 * left + 1, 2 * right + 1]))]
-    make = dl.fem_factory(spec, supports, dl.damping_alpha(p, omega))
-    sim, clock = coupled_simulation(p, make, spec.scene, dem, t_load, models=(spec.bonds,))
-    fem, bonds, wf = clock.fem, spec.bonds, spec.width_factor
+    sim, fem, bonds = dl.simulate(p, mode, dem, spec, supports, dl.damping_alpha(p, omega), t_load)
+    wf = spec.width_factor
     sim.probes.update({
         "load": lambda: -wf * fem.reaction(2 * punch + 1),
         "deflection": lambda: -float(fem.state.u[under, 1].mean()),
@@ -131,14 +133,14 @@ def bending_specimen(p: dict, dem: str, cf: dict, single_leg: bool, warnings: li
     return sim
 
 
-def bending_warnings(p: dict, mode: str = "II", share: float = 0.3) -> list[str]:
+def bending_warnings(p: dict, mode: str, share: float, d: float) -> list[str]:
     """Where the cohesive model cannot match beam theory's LEFM initiation load within the check's
     tolerance: a cohesive zone (delamination.cohesive_zone_length in ``mode``, the slender-arm
     upper estimate) longer than ``share`` of the crack or of the ligament L - a0 carries load the
     closed form gives to the crack tip (measured on enf_coarse, h = 3 mm, estimate 8 mm: peak
     3.0 % below beam theory at min(a0, L - a0) = 25 mm, 5.2 % at 20 mm, 7.5 % at 15 mm), and a
-    zone shorter than 4 bonds is not resolved."""
-    L, a0, d = p["geometry.half_span"], p["geometry.crack_length"], p["zone.particle_size"]
+    zone shorter than 4 bonds (of spacing d, m) is not resolved."""
+    L, a0 = p["geometry.half_span"], p["geometry.crack_length"]
     Z0, R0 = dl.resolved_strengths(p, d)
     Gc, tau = (p["interface.GIc"], Z0) if mode == "I" else (p["interface.GIIc"], R0)
     l_cz = dl.cohesive_zone_length(p, Gc, tau, mode)
@@ -159,13 +161,14 @@ def evaluate(p: dict, h: dict, mode: str):
     P, delta = np.asarray(h["load"]), np.asarray(h["deflection"])
     tip, D = np.asarray(h["crack_tip"]), np.asarray(h["interface_dissipated"])
     k = dl.peak_before_growth(P, tip, p["geometry.crack_length"], 1e-3)
-    Z0, R0 = dl.resolved_strengths(p, p["zone.particle_size"])
+    d = dl.bond_spacing(p, mode)
+    Z0, R0 = dl.resolved_strengths(p, d)
     qoi = {"Z0_used": Z0, "R0_used": R0, "peak_load": float(P[k]), "deflection_at_peak": float(delta[k]),
            "peak_load_uncorrected_ref": float(cf["P_peak_uncorrected"])}
     qoi["initial_compliance"] = dl.initial_compliance(P, delta, k, 0.5)
-    qoi.update(dl.cohesive_zone_qoi(p, h, k, p["interface.GIIc"], R0, "II"))
+    qoi.update(dl.cohesive_zone_qoi(p, h, k, p["interface.GIIc"], R0, "II", d))
     qoi["crack_growth"], qoi["dissipated_energy_ratio"] = dl.growth_and_dissipation(
-        p, tip, D, np.arange(len(P)) > k, p["interface.GIIc"])
+        p, tip, D, np.arange(len(P)) > k, p["interface.GIIc"], d)
     src = "beam theory with the Wang & Williams (1992) crack correction a + 0.42 chi h"
     # reported, not checked: the 2D model's point load and point supports add local compliance
     # beam theory lacks (measured 7 % on enf_coarse, span / depth 13)
@@ -183,7 +186,7 @@ def plot_bending(p: dict, h: dict, cf: dict, title: str, plots_dir):
     import matplotlib.pyplot as plt
     delta = np.asarray(h["deflection"])
     fig, ax = plt.subplots(1, 2, figsize=(10, 4))
-    ax[0].plot(1e3 * delta, h["load"], label="coupled (FEM arms + DEM crack path)")
+    ax[0].plot(1e3 * delta, h["load"], label="this run")
     d = np.linspace(0, cf["delta_peak"], 20)
     ax[0].plot(1e3 * d, d / cf["C0"], "k--", label="beam theory (elastic)")
     ax[0].axhline(cf["P_peak"], color="k", ls=":", label="initiation load, beam theory")

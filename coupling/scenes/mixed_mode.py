@@ -23,7 +23,7 @@ from . import enf
 
 NAME = "mixed_mode"
 DESCRIPTION = "coupled: single leg bending, mixed-mode initiation and growth vs B-K"
-MODES = ("coupled",)
+MODES = ("coupled", "fem")
 # the cohesive zone rule of the DCB (measured on mixed_mode_coarse: N = 5, Z0 = 59 / R0 = 78 MPa,
 # peak 20 % high; Z0 = R0 = 30 MPa, peak 4 % high)
 PARAMETERS = {**enf.PARAMETERS, "interface.cohesive_zone_bonds": dl.PARAMETERS["interface.cohesive_zone_bonds"]}
@@ -46,13 +46,13 @@ def closed_form(p: dict) -> dict:
     return {"P_peak": Pc, "B": B, "Gc": Gc, "C0": C, "delta_peak": Pc * C}
 
 
-def validity(p: dict) -> list[str]:
+def validity(p: dict, mode: str = "coupled") -> list[str]:
     """enf.validity with the mode I zone (G_II / G is about 0.4) and this case's 10 % tolerance."""
-    return enf.validity(p, "I", 0.5)
+    return enf.validity(p, mode, "I", 0.5)
 
 
 def build(p: dict, mode: str, dem: str):
-    return enf.bending_specimen(p, dem, closed_form(p), single_leg=True, warnings=validity(p))
+    return enf.bending_specimen(p, mode, dem, closed_form(p), single_leg=True, warnings=validity(p, mode))
 
 
 def evaluate(p: dict, h: dict, mode: str):
@@ -61,11 +61,12 @@ def evaluate(p: dict, h: dict, mode: str):
     tip, D = np.asarray(h["crack_tip"]), np.asarray(h["interface_dissipated"])
     a0 = p["geometry.crack_length"]
     k = dl.peak_before_growth(P, tip, a0, 1e-3)
-    Z0, R0 = dl.resolved_strengths(p, p["zone.particle_size"])
+    d = dl.bond_spacing(p, mode)
+    Z0, R0 = dl.resolved_strengths(p, d)
     qoi = {"Z0_used": Z0, "R0_used": R0, "peak_load": float(P[k]), "deflection_at_peak": float(delta[k]), "mode_ratio_GII_G": cf["B"]}
     qoi["initial_compliance"] = dl.initial_compliance(P, delta, k, 0.5)
-    qoi.update(dl.cohesive_zone_qoi(p, h, k, p["interface.GIIc"], R0, "II"))
-    qoi["crack_growth"], ratio = dl.growth_and_dissipation(p, tip, D, np.arange(len(P)) > k, cf["Gc"])
+    qoi.update(dl.cohesive_zone_qoi(p, h, k, p["interface.GIIc"], R0, "II", d))
+    qoi["crack_growth"], ratio = dl.growth_and_dissipation(p, tip, D, np.arange(len(P)) > k, cf["Gc"], d)
     qoi["dissipated_energy_ratio"] = ratio
     src = (f"beam theory, Williams partition (G_II/G = {cf['B']:.3f}) with crack corrections, "
            f"{p['interface.mixed_mode']} Gc = {cf['Gc']:.0f} J/m^2")
