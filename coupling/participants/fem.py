@@ -166,8 +166,10 @@ class NodeBondForces:
 def cohesive_node_bonds(dyn: ExplicitDynamics, pairs: np.ndarray, area: np.ndarray, law, friction: float):
     """LawBonds joining coincident FEM nodes across a ply interface (a cohesive far field):
     pairs (k, 2) lower / upper node, area (k,) m^2 each pair stands for; evaluated on the nodes
-    at each force evaluation, their stable step (Gershgorin, 2 k on the lighter node) joins the
-    FEM's."""
+    at each force evaluation. The FEM's stable step becomes that of elements and pairs together:
+    a pair's spring adds to its nodes' elements, so omega^2 <= omega_el^2 + 4 k / m (the largest
+    eigenvalue of a sum is at most the sum of the largest; the elements' own step alone, or the
+    pairs' alone, is not a bound: a DCB with pairs at the elements' limit blew up in 220 steps)."""
     from physics.law_bonds import LawBonds
     # coincident nodes: the bond normal is the laminate's (+y in a 2D slice, +z in 3D, from the
     # lower ply); positions padded to 3D as FemNodes gives them
@@ -179,8 +181,18 @@ def cohesive_node_bonds(dyn: ExplicitDynamics, pairs: np.ndarray, area: np.ndarr
     dyn.node_forces = [FemNodes(dyn).model(bonds, dyn)]
     k_bond = law.K * area
     m_pair = np.minimum(dyn.m[pairs[:, 0]], dyn.m[pairs[:, 1]])
-    dyn.critical_dt_extra = float(np.min(2.0 / np.sqrt(2 * 2 * k_bond / np.maximum(m_pair, 1e-300))))
+    omega_el = 2.0 / dyn.region.critical_dt(dyn.density_scale)
+    dyn.critical_dt_extra = float(2.0 / np.sqrt(omega_el**2 + np.max(4 * k_bond / np.maximum(m_pair, 1e-300))))
     return bonds
+
+
+def cohesive_penalty(dyn: ExplicitDynamics, pairs: np.ndarray, area: np.ndarray, K: float) -> float:
+    """Pa/m, the stiffness per area K, or less where the pairs would lower the elements' stable
+    step by more than 11 %: at most a quarter of m / (A dt_el^2) (the lighter node's mass m, the
+    pair's area A), so that omega_el^2 + 4 K A / m <= 1.25 omega_el^2 (cohesive_node_bonds)."""
+    dt_el = dyn.region.critical_dt(dyn.density_scale)
+    m_pair = np.minimum(dyn.m[pairs[:, 0]], dyn.m[pairs[:, 1]])
+    return float(min(K, 0.25 * np.min(m_pair / area) / dt_el**2))
 
 
 def energies_with(energies, families):

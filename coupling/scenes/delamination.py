@@ -44,7 +44,7 @@ from fem_region.explicit import ExplicitDynamics
 
 from ..params import CaseError, Param
 from ..participants.coupled import coupled_simulation
-from ..participants.fem import FEM_OPTIONS, cohesive_node_bonds, energies_with, fem_only, make_region
+from ..participants.fem import FEM_OPTIONS, cohesive_node_bonds, cohesive_penalty, energies_with, fem_only, make_region
 
 def ranged(default: float, doc: str, unit: str, low: float, high: float) -> Param:
     """A parameter inside the range over which the specimens are verified (tests/test_delamination_ranges.py
@@ -249,16 +249,11 @@ def simulate(p: dict, mode: str, dem: str, spec: Specimen, supports, alpha: floa
         return sim, clock.fem, spec.bonds
     dyn = ExplicitDynamics(spec.region, supports=supports, alpha=alpha)
     pairs, area = spec.pairs, spec.pair_area
-    dt_el = dyn.region.critical_dt(dyn.density_scale)
-    m_pair = np.minimum(dyn.m[pairs[:, 0]], dyn.m[pairs[:, 1]])
-    # a pair's spring adds to its nodes' elements (Gershgorin: omega^2 = omega_el^2 + 4 K A / m):
-    # at a quarter of m / (A dt_el^2) it lowers the elements' step by 11 % at most
-    K = min(50 * p["material.E22"] / p["geometry.arm_thickness"], 0.25 * float(np.min(m_pair / area)) / dt_el**2)
+    K = cohesive_penalty(dyn, pairs, area, 50 * p["material.E22"] / p["geometry.arm_thickness"])
     Z0, R0 = resolved_strengths(p, bond_spacing(p, mode))
     law = HashinCohesiveLaw(K=K, Z0=Z0, R0=R0, GIc=p["interface.GIc"], GIIc=p["interface.GIIc"],
                             eta=p["interface.eta"], mixed_mode=p["interface.mixed_mode"])
-    bonds = cohesive_node_bonds(dyn, pairs, area, law, p["interface.friction"])
-    dyn.critical_dt_extra = float(2.0 / np.sqrt((2.0 / dt_el) ** 2 + np.max(4 * K * area / m_pair)))
+    bonds = cohesive_node_bonds(dyn, pairs, area, law, p["interface.friction"])  # (the step of both together)
     behind = dyn.region.X[pairs[:, 0], 0] < spec.a0 - 1e-9 * p["geometry.length"]
     bonds.damage[behind], bonds.t_failed[behind] = 1.0, 0.0  # the initial crack: faces in contact only
     sim = fem_only(dyn, p, t_end, {})

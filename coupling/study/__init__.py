@@ -115,17 +115,19 @@ class Study:
             need = [("geometry", "laminate"), ("zone", "particle_size")]
             refuse = [("geometry", k) for k in ("material", "depth", "length", "width")] + \
                 [("zone", "plies_per_particle"), ("mesh", "elements_width"), ("mesh", "element_ratio")] + \
-                [("mesh", k) for k in ("growth", "max_size")]
+                [("mesh", k) for k in ("growth", "max_size", "elements_per_run")]
             refuse_tables = ("sheets", "loads")
         elif shape in LAMINATED:
             need = [("geometry", "laminate"), ("geometry", "width")]
             refuse = [("geometry", k) for k in ("material", "depth", "length")] + [("zone", "particle_size")] + \
-                [("mesh", k) for k in ("growth", "max_size", "elements_per_ply")]
+                [("mesh", k) for k in ("growth", "max_size", "elements_per_ply")] + \
+                ([("mesh", "elements_per_run")] if shape == "plate" else [])
             refuse_tables = ("sheets", "loads")
         else:
             need = [("geometry", "material"), ("geometry", "depth"), ("geometry", "width"), ("zone", "particle_size")]
             refuse = [("geometry", "laminate"), ("zone", "plies_per_particle"), ("zone", "ply_failure"),
-                      ("mesh", "elements_along"), ("mesh", "element_ratio"), ("mesh", "elements_per_ply")]
+                      ("mesh", "elements_along"), ("mesh", "element_ratio"), ("mesh", "elements_per_ply"),
+                      ("mesh", "elements_per_run")]
             refuse_tables = ("laminates", "impactors")
         for table, key in need:
             if not given(table, key) or P[f"{table}.{key}"].default in (0, ""):
@@ -144,7 +146,7 @@ class Study:
                                 "leave it out")
             refuse.append(("mesh", "file"))
         elif given("mesh", "file"):
-            for key in ("elements_along", "element_ratio"):
+            for key in ("elements_along", "element_ratio", "elements_per_run"):
                 if given("mesh", key):
                     raise CaseError(f"mesh.{key}: has no effect with mesh.file; allowed: leave it out")
                 P.pop(f"mesh.{key}", None)

@@ -132,7 +132,7 @@ class PanelParts:
 def panel(study, p: dict, mode: str, dem: str):
     """(Simulation, Built) of the panel in ``mode`` (fem or coupled)."""
     g = panel_of(p)
-    tp, L, l, n_sub = g.tp, g.L, g.l, g.n_sub
+    L, l, n_sub = g.L, g.l, g.n_sub
     if n_sub >= g.plies:
         raise CaseError(f"{g.delamination}.sublaminate_plies = {n_sub}: allowed below the laminate's {g.plies} plies")
     if not l < 0.9 * L:
@@ -141,7 +141,7 @@ def panel(study, p: dict, mode: str, dem: str):
     if p[f"supports.{support}.condition"] != "clamped":
         raise CaseError(f"supports.{support}.condition = {p[f'supports.{support}.condition']!r}: a panel is clamped "
                         "at its ends; allowed: clamped")
-    H, h, yc, x1, x2 = g.H, g.h, g.yc, g.x1, g.x2
+    H, yc, x1, x2 = g.H, g.yc, g.x1, g.x2
     win = windows(p, g) if mode == "coupled" else []
     region, X0, upper, xs, D = panel_region(p, g, win)
     X = region.X

@@ -253,6 +253,8 @@ SECTIONS: dict[str, dict[str, Param]] = {
                       "after the [supports.*] table holds that support's nodes; relative to the case file; "
                       "replaces elements_along and element_ratio", kind="str"),
         "element_ratio": Param(6.0, "largest / smallest element length, graded from the zone", low=1.0, high=100.0),
+        "elements_per_run": Param(0, "element rows through each run of equal plies (beams); 0: one per particle "
+                                  "row (a coarser far field takes a larger stable step)", kind="int", low=0, high=20),
         "elements_width": Param(4, "Hex8 elements across the modelled half width (beam_3d, bonded_beam_3d), or "
                                 "across the zone's half width (plate)", kind="int", low=1, high=200),
         "growth": Param(1.2, "bonded beams: element length ratio between neighbours, from the particle size at the "
