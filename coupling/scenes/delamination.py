@@ -240,9 +240,9 @@ def cohesive_specimen(p: dict, a0: float, omega_arm: float, stations: tuple[floa
 def simulate(p: dict, mode: str, dem: str, spec: Specimen, supports, alpha: float, t_end: float):
     """(Simulation, FEM participant, the crack plane's LawBonds) of a specimen: coupled (the DEM
     window's bonds on the particles) or fem (the node pairs' bonds: penalty 50 E22 / h, Turon
-    et al. 2007's alpha = 50 against the arm, or less where it would lower the elements' stable
-    step by more than 11 %, the step of both together; strengths by resolved_strengths on the
-    node spacing)."""
+    et al. 2007's alpha = 50 against the arm, or the elements' limit if lower
+    (participants.fem.cohesive_penalty; the step is that of both together); strengths by
+    resolved_strengths on the node spacing)."""
     if mode == "coupled":
         sim, clock = coupled_simulation(p, fem_factory(spec, supports, alpha), spec.scene, dem, t_end,
                                         models=(spec.bonds,))

@@ -418,8 +418,8 @@ def _far_field_bonds(p: dict, built: Built, dyn: ExplicitDynamics) -> LawBonds |
     """A cohesive far field (laminates' far_field_interfaces = "cohesive"): the node
     pairs the mesh doubled at the ply runs' interfaces, joined by the laminate's interface law
     with its penalty (0: 50 x the plies' smallest transverse modulus over the particle size,
-    stiff against an element row as Turon et al. 2007 advise, or less where that would lower
-    the elements' stable step by more than 11 %: participants.fem.cohesive_penalty), each pair
+    stiff against an element row as Turon et al. 2007 advise, or the elements' own limit if
+    lower: participants.fem.cohesive_penalty), each pair
     standing for its share of the interface (times the slice's thickness in 2D); None with
     tied plies."""
     pairs = built.fem_pairs
@@ -428,7 +428,7 @@ def _far_field_bonds(p: dict, built: Built, dyn: ExplicitDynamics) -> LawBonds |
     lam, name = built.lam, p[f"laminates.{p['geometry.laminate']}.interface"]
     itf = lam.interface
     area = built.fem_pair_area * (built.t if dyn.region.dim == 2 else 1.0)  # a 2D slice is t thick
-    # as stiff as 50 E_y / d, but lowering the elements' stable step by 11 % at most
+    # as stiff as 50 E_y / d, or the elements' limit (the step of both together: dt_el / sqrt 2 at most)
     K = itf["penalty"] or cohesive_penalty(dyn, pairs, area, 50 * lam.transverse_modulus() / built.t)
     try:
         law = HashinCohesiveLaw(K=K, Z0=itf["Z0"], R0=itf["R0"], GIc=itf["GIc"], GIIc=itf["GIIc"])
