@@ -64,7 +64,7 @@ def domain(p: dict, mode: str = "coupled") -> tuple[tuple[float, float], list[st
     if mode == "coupled":
         dl.check_resolution(p)
     cf = closed_form(p)
-    return window(p, cf, final_crack_length(p, cf)), dl.strength_warnings(p, dl.bond_spacing(p, mode))
+    return window(p, cf, final_crack_length(p, cf)), dl.strength_warnings(p, dl.bond_spacing(p, mode), dl.keys_of(mode))
 
 
 def final_crack_length(p: dict, cf: dict) -> float:
@@ -137,7 +137,7 @@ def evaluate(p: dict, h: dict, mode: str):
     tip, D = np.asarray(h["crack_tip"]), np.asarray(h["interface_dissipated"])
     k = dl.peak_before_growth(P, tip, p["geometry.crack_length"], 1e-3)
     d = dl.bond_spacing(p, mode)
-    Z0, R0 = dl.resolved_strengths(p, d)
+    Z0, R0 = dl.resolved_strengths(p, d, dl.keys_of(mode))
     qoi = {"Z0_used": Z0, "R0_used": R0, "peak_load": float(P[k]), "opening_at_peak": float(delta[k])}
     qoi["initial_compliance"] = dl.initial_compliance(P, delta, k, 0.4)
     qoi.update(dl.cohesive_zone_qoi(p, h, k, p["interface.GIc"], Z0, "I", d))

@@ -250,7 +250,7 @@ def simulate(p: dict, mode: str, dem: str, spec: Specimen, supports, alpha: floa
     dyn = ExplicitDynamics(spec.region, supports=supports, alpha=alpha)
     pairs, area = spec.pairs, spec.pair_area
     K = cohesive_penalty(dyn, pairs, area, 50 * p["material.E22"] / p["geometry.arm_thickness"])
-    Z0, R0 = resolved_strengths(p, bond_spacing(p, mode))
+    Z0, R0 = resolved_strengths(p, bond_spacing(p, mode), keys_of(mode))
     law = HashinCohesiveLaw(K=K, Z0=Z0, R0=R0, GIc=p["interface.GIc"], GIIc=p["interface.GIIc"],
                             eta=p["interface.eta"], mixed_mode=p["interface.mixed_mode"])
     bonds = cohesive_node_bonds(dyn, pairs, area, law, p["interface.friction"])  # (the step of both together)
@@ -325,7 +325,13 @@ def check_resolution(p: dict) -> None:
 
 
 SCENE_KEYS = {"Z0": "interface.Z0", "R0": "interface.R0", "GIc": "interface.GIc", "GIIc": "interface.GIIc",
-              "E22": "material.E22", "N": "interface.cohesive_zone_bonds"}
+              "E22": "material.E22", "N": "interface.cohesive_zone_bonds", "d": "zone.particle_size"}
+
+
+def keys_of(mode: str) -> dict:
+    """Where a specimen keeps each value in ``mode``: the bonds' spacing is the particles' (coupled)
+    or the FEM's element length (fem)."""
+    return SCENE_KEYS if mode == "coupled" else {**SCENE_KEYS, "d": "mesh.element_length"}
 
 
 def resolved_strengths(p: dict, d: float, keys: dict = SCENE_KEYS) -> tuple[float, float]:
@@ -349,7 +355,7 @@ def resolved_strengths(p: dict, d: float, keys: dict = SCENE_KEYS) -> tuple[floa
         if p[gkey] < tau**2 / (2 * K):
             raise CaseError(f"{gkey} = {p[gkey]:g}: below the elastic energy at initiation {key}^2 / (2 K) = "
                             f"{tau**2 / (2 * K):.4g} J/m^2 (K = E22 / d, d = {d:g} m); allowed: {gkey} >= that, "
-                            f"a lower {key}, or a smaller zone.particle_size")
+                            f"a lower {key}, or a smaller {keys['d']}")
     return Z0, R0
 
 
@@ -370,16 +376,16 @@ def cohesive_zone_length(p: dict, Gc: float, tau: float, mode: str) -> float:
     return float(np.sqrt(E11 * h * Gc) / tau)
 
 
-def strength_warnings(p: dict, d: float) -> list[str]:
+def strength_warnings(p: dict, d: float, keys: dict = SCENE_KEYS) -> list[str]:
     """What the cohesive-zone rule changed, said before the run (summary.json "warnings")."""
-    Z0, R0 = resolved_strengths(p, d)
+    Z0, R0 = resolved_strengths(p, d, keys)
     out = []
     for key, tau, gkey in (("interface.Z0", Z0, "interface.GIc"), ("interface.R0", R0, "interface.GIIc")):
         rice = 9 * np.pi / 32 * p["material.E22"] * p[gkey] / tau**2
         if rice < 2 * d:
             out.append(f"{key} = {tau:.4g} Pa: its cohesive zone (Rice, {1e3 * rice:.3g} mm) spans fewer than 2 "
                        f"bonds of d = {d:g} m, so initiation follows the strength rather than {gkey}; for the "
-                       "checks: interface.cohesive_zone_bonds >= 2, or a smaller zone.particle_size")
+                       f"checks: interface.cohesive_zone_bonds >= 2, or a smaller {keys['d']}")
     for key, given, used in (("interface.Z0", p["interface.Z0"], Z0), ("interface.R0", p["interface.R0"], R0)):
         if used < given:
             out.append(f"{key} lowered from {given:.4g} to {used:.4g} Pa: its cohesive zone then spans "

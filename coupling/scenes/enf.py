@@ -89,7 +89,7 @@ def validity(p: dict, mode: str = "coupled", fracture: str = "II", share: float 
     if mode == "coupled":
         dl.check_resolution(p)
     d = dl.bond_spacing(p, mode)
-    return dl.strength_warnings(p, d) + bending_warnings(p, fracture, share, d)
+    return dl.strength_warnings(p, d, dl.keys_of(mode)) + bending_warnings(p, fracture, share, d, dl.keys_of(mode))
 
 
 def bending_specimen(p: dict, mode: str, dem: str, cf: dict, single_leg: bool, warnings: list[str]):
@@ -133,7 +133,7 @@ def bending_specimen(p: dict, mode: str, dem: str, cf: dict, single_leg: bool, w
     return sim
 
 
-def bending_warnings(p: dict, mode: str, share: float, d: float) -> list[str]:
+def bending_warnings(p: dict, mode: str, share: float, d: float, keys: dict = dl.SCENE_KEYS) -> list[str]:
     """Where the cohesive model cannot match beam theory's LEFM initiation load within the check's
     tolerance: a cohesive zone (delamination.cohesive_zone_length in ``mode``, the slender-arm
     upper estimate) longer than ``share`` of the crack or of the ligament L - a0 carries load the
@@ -141,7 +141,7 @@ def bending_warnings(p: dict, mode: str, share: float, d: float) -> list[str]:
     3.0 % below beam theory at min(a0, L - a0) = 25 mm, 5.2 % at 20 mm, 7.5 % at 15 mm), and a
     zone shorter than 4 bonds (of spacing d, m) is not resolved."""
     L, a0 = p["geometry.half_span"], p["geometry.crack_length"]
-    Z0, R0 = dl.resolved_strengths(p, d)
+    Z0, R0 = dl.resolved_strengths(p, d, keys)
     Gc, tau = (p["interface.GIc"], Z0) if mode == "I" else (p["interface.GIIc"], R0)
     l_cz = dl.cohesive_zone_length(p, Gc, tau, mode)
     out = []
@@ -151,7 +151,7 @@ def bending_warnings(p: dict, mode: str, share: float, d: float) -> list[str]:
                    "check: a longer geometry.half_span or a0 nearer L / 2, or a higher strength")
     if l_cz < 4 * d:
         out.append(f"the mode {mode} cohesive zone (about {1e3 * l_cz:.3g} mm) spans fewer than 4 bonds of d = {d:g} m: "
-                   "the peak load is not resolved; for the check: a smaller zone.particle_size, or "
+                   f"the peak load is not resolved; for the check: a smaller {keys['d']}, or "
                    "interface.cohesive_zone_bonds > 0 (lowers the strengths)")
     return out
 
@@ -162,7 +162,7 @@ def evaluate(p: dict, h: dict, mode: str):
     tip, D = np.asarray(h["crack_tip"]), np.asarray(h["interface_dissipated"])
     k = dl.peak_before_growth(P, tip, p["geometry.crack_length"], 1e-3)
     d = dl.bond_spacing(p, mode)
-    Z0, R0 = dl.resolved_strengths(p, d)
+    Z0, R0 = dl.resolved_strengths(p, d, dl.keys_of(mode))
     qoi = {"Z0_used": Z0, "R0_used": R0, "peak_load": float(P[k]), "deflection_at_peak": float(delta[k]),
            "peak_load_uncorrected_ref": float(cf["P_peak_uncorrected"])}
     qoi["initial_compliance"] = dl.initial_compliance(P, delta, k, 0.5)

@@ -62,7 +62,7 @@ def evaluate(p: dict, h: dict, mode: str):
     a0 = p["geometry.crack_length"]
     k = dl.peak_before_growth(P, tip, a0, 1e-3)
     d = dl.bond_spacing(p, mode)
-    Z0, R0 = dl.resolved_strengths(p, d)
+    Z0, R0 = dl.resolved_strengths(p, d, dl.keys_of(mode))
     qoi = {"Z0_used": Z0, "R0_used": R0, "peak_load": float(P[k]), "deflection_at_peak": float(delta[k]), "mode_ratio_GII_G": cf["B"]}
     qoi["initial_compliance"] = dl.initial_compliance(P, delta, k, 0.5)
     qoi.update(dl.cohesive_zone_qoi(p, h, k, p["interface.GIIc"], R0, "II", d))
