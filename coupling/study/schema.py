@@ -71,6 +71,15 @@ def _strength(doc):
     return positive(REQUIRED, doc, "Pa")
 
 
+# what a beam's striker (cylinder or flat punch) declares besides its shape's size
+_BEAM_STRIKER = {
+    "mass_per_width": positive(REQUIRED, "mass per metre of width", "kg/m"),
+    "velocity": positive(REQUIRED, "impact speed (downwards, on the top face at x = 0)", "m/s"),
+    "penalty": Param(0.0, "contact penalty per particle / node; 0 = the lattice's transverse bond stiffness E_y t",
+                     unit="N/m", low=0.0),
+    "friction": Param(0.2, "impactor friction", low=0.0, high=2.0),
+}
+
 KINDS: dict[str, dict[str, dict[str, Param]]] = {
     "materials": {
         "ply": {
@@ -133,21 +142,8 @@ KINDS: dict[str, dict[str, dict[str, Param]]] = {
                                 "area, a particle times d^2", "Pa/m"),
         },
         "flat_punch": {  # a 2D beam's: a flat strip face across the width, on the top face at x = 0
-            "half_width": positive(REQUIRED, "half the punch's face length along the beam", "m"),
-            "mass_per_width": positive(REQUIRED, "mass per metre of width", "kg/m"),
-            "velocity": positive(REQUIRED, "impact speed (downwards, on the top face at x = 0)", "m/s"),
-            "penalty": Param(0.0, "contact penalty per particle / node; 0 = the lattice's transverse bond "
-                             "stiffness E_y t", unit="N/m", low=0.0),
-            "friction": Param(0.2, "impactor friction", low=0.0, high=2.0),
-        },
-        "cylinder": {
-            "radius": positive(REQUIRED, "cylinder radius", "m"),
-            "mass_per_width": positive(REQUIRED, "mass per metre of width", "kg/m"),
-            "velocity": positive(REQUIRED, "impact speed (downwards, on the top face at x = 0)", "m/s"),
-            "penalty": Param(0.0, "contact penalty per particle / node; 0 = the lattice's transverse bond "
-                             "stiffness E_y t", unit="N/m", low=0.0),
-            "friction": Param(0.2, "impactor friction", low=0.0, high=2.0),
-        },
+            "half_width": positive(REQUIRED, "half the punch's face length along the beam", "m"), **_BEAM_STRIKER},
+        "cylinder": {"radius": positive(REQUIRED, "cylinder radius", "m"), **_BEAM_STRIKER},
     },
     "sheets": {
         "bottom": {  # a bonded beam's, on its bottom face over its whole length
