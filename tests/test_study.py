@@ -222,6 +222,20 @@ def test_a_far_field_coarser_through_the_thickness_holds_the_closed_form(femdem,
     assert runs[1]["clock"]["dt_fem"] >= runs[0]["clock"]["dt_fem"]
 
 
+@settings(max_examples=3, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.generate],
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(half_width=st.floats(1e-3, 5e-3), velocity=st.floats(0.5, 3.0), mass=st.floats(0.3, 1.0))
+def test_a_flat_punch_holds_the_closed_form_over_its_size_speed_and_mass(femdem, tmp_path_factory, half_width,
+                                                                         velocity, mass):
+    """All-FEM, the punch's half width up to the zone's less two particles, speed and mass
+    sampled: the peak deflection within the study's 15 % of the spring-mass estimate."""
+    path = punch_study(tmp_path_factory.mktemp("punch"), half_width)
+    code, s, err = femdem("run", str(path), "--mode", "fem", f"--set=impactors.striker.velocity={velocity}",
+                          f"--set=impactors.striker.mass_per_width={mass}")
+    assert code == 0, err
+    assert all(c["passed"] for c in s["checks"].values()), s["checks"]
+
+
 def test_a_punch_wider_than_the_zone_is_refused(tmp_path):
     from coupling.case import load_case
     from coupling.params import CaseError
