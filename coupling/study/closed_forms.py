@@ -12,6 +12,7 @@ from dem_region import ply_lattice
 
 from ..checks import check, energy_balance, within
 from ..params import Param
+from . import panel
 from .schema import section
 
 _CHECK = {"qoi": Param("", "the qoi compared (a name the run reports)", kind="str"),
@@ -126,43 +127,36 @@ def elastic_cracking_time(study, p: dict, f: dict) -> float:
 _SOURCE = Param("", "where the value comes from (a test, a paper)", kind="str")
 
 
-def _panel(name):
-    def reference(study, p, f, qoi):
-        from . import panel
-        return getattr(panel, name)(study, p, f, qoi)
-    return reference
-
-
 CLOSED_FORMS: dict[str, ClosedForm] = {
     "panel_axial_stiffness": ClosedForm(
         "a panel's pre-buckling axial stiffness E11 H b / L (panels)", "closed_form_axial_stiffness",
-        _panel("axial_stiffness"), "pre-buckling axial stiffness E11 H b / L", with_qoi=True),
+        panel.axial_stiffness, "pre-buckling axial stiffness E11 H b / L", with_qoi=True),
     "thin_film_buckling": ClosedForm(
         "the panel load at which a delaminated film buckles: clamped thin film E11 H b (pi^2/3)(h/l)^2 with "
         "l + 2 chi h (corrected beam theory's root rotation) and Engesser's shear (panels)", "closed_form_local",
-        _panel("film_buckling_load"), "closed forms for this geometry (VALIDATION.md): thin film clamped at its "
+        panel.film_buckling_load, "closed forms for this geometry (VALIDATION.md): thin film clamped at its "
         "tips, E11 H b (pi^2/3)(h/l)^2, with l + 2 chi h (corrected beam theory's root rotation) and Engesser's "
         "shear", with_qoi=True),
     "stepped_column_buckling": ClosedForm(
         "the delaminated panel's limit load: a clamped stepped column, the base alone in the middle carrying P "
         "minus the buckled film's force (Timoshenko & Gere 2.10), with the delamination length at the limit load "
-        "when it grew (panels)", "closed_form_global", _panel("stepped_column_buckling_load"),
+        "when it grew (panels)", "closed_form_global", panel.stepped_column_buckling_load,
         "clamped stepped column (Timoshenko & Gere 2.10): intact ends, the base sublaminate in the middle carrying "
         "P minus the film's critical force (with the delamination length at the limit load when it grew)",
         with_qoi=True),
     "film_growth_onset": ClosedForm(
         "the panel load at which the delamination grows: Hutchinson & Suo's G of the film at its measured critical "
         "strain = the B-K toughness of the measured mode mix (panels, coupled, when it grew)", "",
-        _panel("growth_onset"), "Hutchinson & Suo (1992): G = (h / 2E)(sigma - sigma_c)(sigma + 3 sigma_c) = Gc(B) "
+        panel.growth_onset, "Hutchinson & Suo (1992): G = (h / 2E)(sigma - sigma_c)(sigma + 3 sigma_c) = Gc(B) "
         "of the measured mode mix, sigma the base laminate's stress", with_qoi=True),
     "within_windows": ClosedForm(
         "the delamination stopped inside the DEM windows (growth_reached_window_edge = 0), unless they reach the "
-        "clamps' neighbourhood (panels, coupled, when it grew)", "", _panel("window_room"),
+        "clamps' neighbourhood (panels, coupled, when it grew)", "", panel.window_room,
         "the delamination stopped inside the DEM windows, or they reach the clamps' neighbourhood (else raise "
         "zone.window_ahead)", {"qoi": _CHECK["qoi"]}, with_qoi=True),
     "toughness_range": ClosedForm(
         "energy: the interface dissipates between GIc and GIIc per new crack area (the B-K range; panels, coupled, "
-        "when it grew)", "", _panel("toughness_range"),
+        "when it grew)", "", panel.toughness_range,
         "energy: the interface dissipates between GIc and GIIc per new crack area (B-K toughness range)",
         {"qoi": _CHECK["qoi"]}, with_qoi=True),
     "elastic_cracking_time": ClosedForm(

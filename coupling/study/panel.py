@@ -417,7 +417,9 @@ def _film_end(h: dict, n: int) -> int | None:
 def buckling_qoi(name, f, h, p) -> dict:
     """The buckling loads read from the history (module docstring), the pre-buckling axial
     stiffness, the closed forms no check records, and the tips' energy release rate at the
-    limit load (Hutchinson & Suo)."""
+    limit load (Hutchinson & Suo); nothing when the run has no panel."""
+    if "axial_force" not in h:
+        return {}
     g = panel_of(p)
     cf = g.loads()
     E, b, H, h_sub = g.E11, g.b, g.H, g.h

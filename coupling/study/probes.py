@@ -13,6 +13,7 @@ from typing import Callable
 import numpy as np
 
 from ..params import CaseError, Param, positive
+from .panel import buckling_qoi, buckling_series, growth_qoi, growth_series
 from .schema import section
 
 
@@ -241,26 +242,6 @@ def _max_qoi(name, f, h):
     return {name: float(np.max(h[name]))} if name in h else {}
 
 
-def _panel_buckling_series(built, name, f):
-    from .panel import buckling_series
-    return buckling_series(built, name, f)
-
-
-def _panel_buckling_qoi(name, f, h, p):
-    from .panel import buckling_qoi
-    return buckling_qoi(name, f, h, p) if "axial_force" in h else {}
-
-
-def _growth_series(built, name, f):
-    from .panel import growth_series
-    return growth_series(built, name, f)
-
-
-def _growth_qoi(name, f, h, p):
-    from .panel import growth_qoi
-    return growth_qoi(name, f, h, p)
-
-
 _COMPONENTS = ("x", "y", "z", "-x", "-y", "-z")
 PROBES: dict[str, ProbeKind] = {
     "point_displacement": ProbeKind(
@@ -326,7 +307,7 @@ PROBES: dict[str, ProbeKind] = {
         "film_strain (the sublaminate's membrane strain), contact_force and interpenetration of the delaminated "
         "faces; qoi local_buckling_load (the film's critical strain x E11 H b), global_buckling_load (the limit "
         "load), film_critical_strain, their Southwell fits, axial_stiffness, tip_energy_release_rate (panels)",
-        {}, _panel_buckling_series, _panel_buckling_qoi, with_params=True,
+        {}, buckling_series, buckling_qoi, with_params=True,
         reports=("local_buckling_load", "global_buckling_load", "film_critical_strain", "axial_stiffness",
                  "local_buckling_load_southwell", "global_buckling_load_southwell", "peak_axial_force",
                  "max_interpenetration", "tip_energy_release_rate")),
@@ -335,7 +316,7 @@ PROBES: dict[str, ProbeKind] = {
         "interface_dissipated; qoi delamination_growth_left / _right, delamination_length_at_limit_load, "
         "growth_onset_load and its closed form (Hutchinson & Suo for the measured mode mix), "
         "dissipated_per_new_area, growth_reached_window_edge (panels)",
-        {}, _growth_series, _growth_qoi, with_params=True,
+        {}, growth_series, growth_qoi, with_params=True,
         reports=("delamination_growth_left", "delamination_growth_right", "delamination_length_final",
                  "delamination_length_at_limit_load", "growth_onset_load", "growth_mode_ratio",
                  "growth_reached_window_edge", "dissipated_per_new_area", "interface_dissipated")),
