@@ -79,6 +79,7 @@ PANEL = ROOT / "cases" / "seed" / "panel_buckling_coarse.toml"
 @pytest.mark.parametrize("old, new, words", [
     ("modes = ", 't_end = 1e-3\nmodes = ["fem", "coupled"]', ["case.t_end", "duration_periods"]),
     ("modes = ", 'modes = ["fem", "dem"]', ["case.modes", "leave dem out"]),
+    ("modes = ", 'kind_of_nothing = 1', ["case.kind_of_nothing", "unknown key"]),
     ("kind = \"shortening\"", 'kind = "patch"', ["loads.compression", "unknown key"]),
     ("[delaminations.film]", "[delaminations.film]\nfriction = 0.2", ["delaminations.film.friction", "unknown key"]),
     ("shape = \"crack_tips\"", 'shape = "box"', ["zone.shape", "'crack_tips'"]),
@@ -103,6 +104,13 @@ def test_a_bad_panel_is_refused_in_one_line(tmp_path, old, new, words):
         case.scene.build(case.parameters, "fem", "")  # (what only the assembler can say)
     line = str(err.value)
     assert "\n" not in line and all(w in line for w in words), line
+
+
+def test_a_panel_without_modes_runs_in_fem_and_coupled(tmp_path):
+    from coupling.case import load_case
+    path = tmp_path / "panel.toml"
+    path.write_text("\n".join(line for line in PANEL.read_text().splitlines() if not line.startswith("modes = ")))
+    assert load_case(str(path)).scene.MODES == ("fem", "coupled")
 
 
 @pytest.mark.parametrize("key, words", [

@@ -30,12 +30,12 @@ class Study:
         self.PARAMETERS, self.layout = parameters(data, where, probes.PROBES, closed_forms.CLOSED_FORMS)
         meta = self.layout.meta
         self.DESCRIPTION = str(meta.get("description", ""))
-        modes = meta.get("modes", list(MODES))
+        shape = self.PARAMETERS["geometry.shape"].default
+        modes = meta.get("modes", ["fem", "coupled"] if shape == "panel" else list(MODES))
         if not isinstance(modes, list) or not modes or any(m not in MODES for m in modes):
             raise CaseError(f"case.modes = {modes!r}: allowed a list of {', '.join(MODES)}")
         self.MODES = tuple(modes)
         t_end = meta.get("t_end")
-        shape = self.PARAMETERS["geometry.shape"].default
         if shape == "panel":  # a panel's run lasts its load's ramp
             if t_end is not None:
                 raise CaseError(f"case.t_end = {t_end!r}: a panel's run lasts its load's duration_periods; allowed: "
