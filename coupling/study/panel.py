@@ -407,11 +407,15 @@ def growth_series(built, name, f) -> dict:
             "interface_dissipated": bonds.dissipated_energy}
 
 
-def _film_end(h: dict, n: int) -> int | None:
-    """The last sample the film's reading may use: before a tip has grown by a bond (coupled)."""
-    tips = np.maximum(h["growth_left"], h["growth_right"]) if "growth_left" in h else np.zeros(n)
+def film_critical_strain(h: dict, h_sub: float) -> float:
+    """The film's critical strain read from the history (buckling.film_critical_strain on the
+    opening A - B), up to the sample before a tip has grown by a bond (coupled)."""
+    P = np.asarray(h["axial_force"])
+    w_open = np.asarray(h["deflection_A"]) - np.asarray(h["deflection_B"])
+    tips = np.maximum(h["growth_left"], h["growth_right"]) if "growth_left" in h else np.zeros(len(P))
     moved = np.flatnonzero(np.asarray(tips) > 0)
-    return moved[0] - 1 if moved.size else None
+    return buckling.film_critical_strain(P, w_open, np.asarray(h["film_strain"]), h_sub,
+                                         moved[0] - 1 if moved.size else None)
 
 
 def buckling_qoi(name, f, h, p) -> dict:
@@ -433,7 +437,7 @@ def buckling_qoi(name, f, h, p) -> dict:
     u = np.asarray(h["end_shortening"])
     early = (P > 0) & (P < cf["local"] / 3)
     k_axial = float(np.polyfit(u[early], P[early], 1)[0]) if early.sum() >= 3 else float("nan")
-    eps_c = buckling.film_critical_strain(P, w_open, np.asarray(h["film_strain"]), h_sub, _film_end(h, len(P)))
+    eps_c = film_critical_strain(h, h_sub)
     return {"local_buckling_load": E * H * b * eps_c, "global_buckling_load": float(P.max()),
             "film_critical_strain": eps_c, "local_buckling_load_southwell": buckling.southwell(P, w_open),
             "global_buckling_load_southwell": buckling.southwell(P, w_glob),
@@ -454,7 +458,7 @@ def growth_qoi(name, f, h, p) -> dict:
     g = panel_of(p)
     E, b, H, h_sub, l, d = g.E11, g.b, g.H, g.h, g.l, particle_size(p, g)
     P = np.asarray(h["axial_force"])
-    eps_film = buckling_qoi(name, f, h, p)["film_critical_strain"]
+    eps_film = film_critical_strain(h, h_sub)
     gl, gr = np.asarray(h["growth_left"]), np.asarray(h["growth_right"])
     k = int(np.argmax(P))
     grown = np.flatnonzero(np.maximum(gl, gr) >= 2 * d - 1e-9 * d)
