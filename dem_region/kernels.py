@@ -1,10 +1,10 @@
 """Compiled loops of the engine adapters."""
 from __future__ import annotations
 
-from numba import njit
+from physics.compiled import kernel
 
 
-@njit(cache=True)
+@kernel
 def add_held_forces(added, F, V, rows, G, takes, half_dt, mass):
     """Added forces G (k, 3) N on engine rows (k,): all into ``added`` (what ``forces``
     reports), and the components that move (takes (k, 3) bool) into the engine's force F and,

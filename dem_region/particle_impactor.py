@@ -14,6 +14,9 @@ from __future__ import annotations
 import numpy as np
 
 from physics.impactor import RigidImpactor
+from physics.kernels import ball_on_particles
+
+BALLS = ("sphere", "cylinder")  # the shapes with a compiled contact (a cylinder without an axis is a disc)
 
 
 class ParticleImpactor:
@@ -30,7 +33,8 @@ class ParticleImpactor:
         self.force = np.zeros(3)  # N on the impactor at the last evaluation
         self.work = 0.0
         self.stored = 0.0
-        self._x_prev = None
+        self._x_prev = None  # (k, 3) m positions of the last step (None before the first)
+        self._bound = None
         self._f_prev = np.zeros((len(self.ids), 3))
         self._X_prev = self.imp.x.copy()
         self._F_prev = np.zeros(3)
@@ -40,17 +44,43 @@ class ParticleImpactor:
         return self.imp.critical_dt(particle_mass[self.ids])
 
     def apply(self, backend, dt: float) -> None:
-        x = backend.positions_of(self.ids)
-        v = np.zeros_like(x) if self._x_prev is None or dt == 0 else (x - self._x_prev) / dt
-        f, self.stored = self.imp.forces(x, v)
-        F = -f.sum(axis=0)
-        if self._x_prev is not None:
-            self.work += 0.5 * float(np.sum((self._f_prev + f) * (x - self._x_prev))
-                                     + (self._F_prev + F) @ (self.imp.x - self._X_prev))
-        self._x_prev, self._f_prev, self._X_prev, self._F_prev = x, f, self.imp.x.copy(), F
-        touching = np.flatnonzero(np.any(f != 0.0, axis=1))
-        if touching.size:
-            backend.add_forces(self.ids[touching], f[touching])
+        """One engine step: contact forces on the candidates, then the impactor's leapfrog. A
+        ball on a target with particle arrays (the coupling layer's ModelStep: ``x``, ``f``,
+        ``rows_of``) in one compiled pass on those arrays; otherwise through copies."""
+        if self.imp.shape in BALLS and self.imp.axis is None and hasattr(backend, "rows_of"):
+            if self._bound is not backend:  # bind once: the candidates as rows of the target's arrays
+                self._rows = np.ascontiguousarray(backend.rows_of(self.ids), np.int64)
+                self._bound = backend
+            if self._x_prev is None:
+                self._x_prev, self._x_now = np.empty((len(self.ids), 3)), np.empty((len(self.ids), 3))
+                self._f_prev, self._f_now = np.zeros((len(self.ids), 3)), np.zeros((len(self.ids), 3))
+                started = False
+            else:
+                started = True
+            imp = self.imp
+            F = np.empty(3)
+            pen2, dwork = ball_on_particles(backend.x, backend.f, self._rows, self._x_now, self._f_now,
+                                            self._x_prev, self._f_prev, started, dt, imp.x, imp.v,
+                                            float(imp.radius), float(imp.penalty), float(imp.friction),
+                                            float(imp.slip_velocity**2), F)
+            self.stored = 0.5 * imp.penalty * pen2
+            if started:
+                self.work += 0.5 * (dwork + (self._F_prev + F) @ (imp.x - self._X_prev))
+            # this step's state becomes the last one (buffers swapped, nothing allocated)
+            self._x_prev, self._x_now, self._f_prev, self._f_now = self._x_now, self._x_prev, self._f_now, self._f_prev
+            self._X_prev, self._F_prev = imp.x.copy(), F
+        else:
+            x = backend.positions_of(self.ids)
+            v = np.zeros_like(x) if self._x_prev is None or dt == 0 else (x - self._x_prev) / dt
+            f, self.stored = self.imp.forces(x, v)
+            F = -f.sum(axis=0)
+            if self._x_prev is not None:
+                self.work += 0.5 * float(np.sum((self._f_prev + f) * (x - self._x_prev))
+                                         + (self._F_prev + F) @ (self.imp.x - self._X_prev))
+            self._x_prev, self._f_prev, self._X_prev, self._F_prev = x, f, self.imp.x.copy(), F
+            touching = np.flatnonzero(np.any(f != 0.0, axis=1))
+            if touching.size:
+                backend.add_forces(self.ids[touching], f[touching])
         self.force = F
         if dt > 0:  # leapfrog, as the engine moves the particles
             self.imp.v = self.imp.v + dt * F / self.imp.mass * self.free
@@ -76,3 +106,5 @@ class ParticleImpactor:
         self.work, self.stored, self.time = float(d["work"]), float(d["stored"]), float(d["time"])
         self._f_prev, self._X_prev, self._F_prev = np.array(d["f_prev"]), np.array(d["X_prev"]), np.array(d["F_prev"])
         self._x_prev = np.array(d["x_prev"]) if "x_prev" in d else None
+        if self._x_prev is not None:  # the compiled path's spare buffers
+            self._x_now, self._f_now = np.empty_like(self._x_prev), np.empty_like(self._f_prev)

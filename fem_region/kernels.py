@@ -6,13 +6,14 @@ loop visits each quadrature point once and accumulates nodal forces in place.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from physics.compiled import kernel
 
 VOIGT_2D = np.array([[0, 0], [1, 1], [0, 1]])
 VOIGT_3D = np.array([[0, 0], [1, 1], [2, 2], [1, 2], [0, 2], [0, 1]])
 
 
-@njit(cache=True)
+@kernel
 def total_lagrangian_force(u, conn, dN, dx, D, voigt, out):
     """Add the St Venant-Kirchhoff internal force of one quadrature rule to ``out``.
 
@@ -38,14 +39,14 @@ def total_lagrangian_force(u, conn, dN, dx, D, voigt, out):
         total_lagrangian_force_generic(u, conn, dN, dx, D, voigt, out)
 
 
-@njit(cache=True)
+@kernel
 def total_lagrangian_force_generic(u, conn, dN, dx, D, voigt, out):
     """total_lagrangian_force with its sizes read at run time: the reference the compiled
     families are held to."""
     _tl_force(u, conn, dN, dx, D, voigt, out, dN.shape[3], dN.shape[2], voigt.shape[0])
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def _tl_force_plane(u, conn, dN, dx, D, out, nloc):
     """_tl_force for dim = 2 (Voigt xx, yy, xy) with H, E, S, P in scalars (registers, not
     scratch arrays): the same sums in the same order."""
@@ -79,7 +80,7 @@ def _tl_force_plane(u, conn, dN, dx, D, out, nloc):
                 out[n, 1] += (0.0 + p10 * dN[e, q, a, 0] + p11 * dN[e, q, a, 1]) * w
 
 
-@njit(cache=True, inline="always")  # inlined where the sizes are constants, so they fold
+@kernel(inline="always")  # inlined where the sizes are constants, so they fold
 def _tl_force(u, conn, dN, dx, D, voigt, out, dim, nloc, ns):
     nel, nqp = dN.shape[0], dN.shape[1]
     H = np.empty((dim, dim))
@@ -123,7 +124,7 @@ def _tl_force(u, conn, dN, dx, D, voigt, out, dim, nloc, ns):
                     out[n, i] += acc * w
 
 
-@njit(cache=True)
+@kernel
 def respa_kicks(v, a, f_tie, band, m, dt, dt_fast, slow, kick, f_fast, a_slow):
     """The FEM's kicks of one DEM step of the impulse (r-RESPA) clock, in one pass:
     f_fast = f_tie - band; at a FEM step (``slow``) a_slow = a - (f_fast - f_tie) / m and

@@ -6,10 +6,10 @@ scipy's csr_matvecs (each row's stored entries in turn, from zero), so the digit
 """
 from __future__ import annotations
 
-from numba import njit
+from physics.compiled import kernel
 
 
-@njit(cache=True)
+@kernel
 def csr_times(indptr, indices, data, X, out):
     """out (n_rows, c) = A X for A in CSR form (indptr, indices, data) and X (n_cols, >= c):
     only X's first c columns are read (the FEM's dim of a particle's (k, 3) array)."""

@@ -7,10 +7,11 @@ once. Each mirrors a vectorised reference in laws.py / law_bonds.py, and the tes
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from .compiled import kernel
 
 
-@njit(cache=True)
+@kernel
 def scatter_pairs(loc, F, n):
     """(n, 3) N: +F (nb, 3) on each bond's second end, -F on its first (loc (nb, 2) rows)."""
     f = np.zeros((n, 3))
@@ -21,7 +22,7 @@ def scatter_pairs(loc, F, n):
     return f
 
 
-@njit(cache=True)
+@kernel
 def add_rows(target, ids, F):
     """target[ids] += F for (k, 3) rows F, repeated ids summed (np.add.at, without its overhead)."""
     for r in range(ids.shape[0]):
@@ -29,7 +30,7 @@ def add_rows(target, ids, F):
             target[ids[r], k] += F[r, k]
 
 
-@njit(cache=True)
+@kernel
 def add_slope_forces(f, loc, normal, q, a, b):
     """The work-conjugate forces of an interface slip's slope term, into f (n, 3) N: each
     bond's q (nb,) N acts along the normal of its neighbour pairs, -q on both particles of
@@ -42,7 +43,7 @@ def add_slope_forces(f, loc, normal, q, a, b):
                 f[loc[c, 1], k] += g
 
 
-@njit(cache=True)
+@kernel
 def bond_stress(loc, force, d0, cell, n):
     """(nb, 6) Voigt Pa: mean of the end particles' Love-Weber stresses
     sigma_p = sum_b (f_b (x) l_b) / (2 V_p), f_b = A_b t_b (tension positive), symmetrised."""
@@ -65,7 +66,7 @@ def bond_stress(loc, force, d0, cell, n):
     return out
 
 
-@njit(cache=True)
+@kernel
 def hoffman_coefficients(k):
     """The Hoffman index's nine coefficients from the strengths k = (Xt, Xc, Yt, Yc, Zt, Zc,
     S23, S13, S12) Pa: three quadratic, three linear, the three shear strengths."""
@@ -75,7 +76,7 @@ def hoffman_coefficients(k):
             1 / Xt - 1 / Xc, 1 / Yt - 1 / Yc, 1 / Zt - 1 / Zc, S23, S13, S12)
 
 
-@njit(cache=True)
+@kernel
 def hoffman_bond(stress, scale, R, c):
     """Hoffman index of one global Voigt stress (6,) Pa / scale, in the ply axes R (3, 3)
     (columns); c = hoffman_coefficients(strengths)."""
@@ -90,7 +91,7 @@ def hoffman_bond(stress, scale, R, c):
             + l1 * s1 + l2 * s2 + l3 * s3 + (t23 / S23) ** 2 + (t13 / S13) ** 2 + (t12 / S12) ** 2)
 
 
-@njit(cache=True)
+@kernel
 def hoffman_bond_aligned(stress, scale, sel, c):
     """The same index where the ply axes are a signed permutation of x, y, z (0 and 90 plies):
     the ply-axes components are global ones, sel (6,) their Voigt positions (bit-identical to
@@ -119,7 +120,7 @@ def aligned_voigt(R: np.ndarray) -> np.ndarray | None:
                      key(g[0], g[1])], np.int64)
 
 
-@njit(cache=True)
+@kernel
 def _turned(R, xx, yy, zz, yz, xz, xy, a, c):
     """(R^T S R)[a, c] of the symmetric S given by its six components, axes R (3, 3) (columns),
     summed over i, j in order (the association of the numpy form: its digits, not only its value)."""
@@ -136,7 +137,7 @@ def _turned(R, xx, yy, zz, yz, xz, xy, a, c):
     return acc
 
 
-@njit(cache=True)
+@kernel
 def hoffman_ply(stress, axes, scale, k):
     """(nb,) Hoffman index of global Voigt stresses (nb, 6) / scale (nb,) in the bonds' ply axes
     (nb, 3, 3) (columns); k = (Xt, Xc, Yt, Yc, Zt, Zc, S23, S13, S12)."""
@@ -147,7 +148,7 @@ def hoffman_ply(stress, axes, scale, k):
     return out
 
 
-@njit(cache=True)
+@kernel
 def corotate_2d(x, loc, a, b, s0, d0, local, rot, chord):
     """Each bond's branch vector in the frame turned by the angle theta of the chord s from
     bond a's midpoint to bond b's (reference chord s0), into local (nb, 3) m; rot (nb, 2) the
@@ -171,7 +172,7 @@ def corotate_2d(x, loc, a, b, s0, d0, local, rot, chord):
     return delta
 
 
-@njit(cache=True)
+@kernel
 def add_spin_forces(f, loc, a, b, t, local, chord, area):
     """The corotated frame's share of the forces into f (n, 3) N: A dPsi/dtheta dtheta/ds, half
     on each particle of the next pair b (minus) and of the previous pair a (plus)."""
@@ -186,7 +187,7 @@ def add_spin_forces(f, loc, a, b, t, local, chord, area):
             f[loc[a[m], k], 1] += gy
 
 
-@njit(cache=True)
+@kernel
 def _einsum_dot(a, a0, b):
     """sum_i (a_i - a0_i) b_i in the order numpy's einsum adds three terms, (0 + 2) + 1 (its
     digits, not only its value)."""
@@ -198,7 +199,7 @@ def _einsum_dot(a, a0, b):
     return acc
 
 
-@njit(cache=True)
+@kernel
 def ball_contact(x, v, centre, velocity, radius, penalty, friction, slip2, f):
     """Penalty contact of a rigid ball (a disc in 2D) with points x (m, dim) m moving at v
     (m, dim) m/s: normal force penalty x penetration along the outward normal, Coulomb friction
@@ -229,3 +230,93 @@ def ball_contact(x, v, centre, velocity, radius, penalty, friction, slip2, f):
                 f[p, i] -= c * vt[i]
         pen2 += pen * pen
     return pen2
+
+
+@kernel
+def ball_on_particles(X, Fout, rows, x, f, x_prev, f_prev, started, dt, centre, velocity, radius, penalty,
+                      friction, slip2, F):
+    """One step of a rigid ball on particles, in place on an engine's arrays: ball_contact on
+    the candidates' positions X[rows] (X (N, 3) m, rows (k,)), velocities from the last step
+    ((x - x_prev) / dt once ``started``), their forces added to Fout[rows] (N) where non-zero.
+    Out: x, f (k, 3) this step's positions and forces; F (3,) N the force on the ball (minus
+    the sum of f, row by row as numpy's sum over axis 0); f_prev is used as scratch. Returns
+    (sum of squared penetrations m^2, sum of (f_prev + f) . (x - x_prev) J in numpy's pairwise
+    order)."""
+    k = rows.shape[0]
+    pen2 = 0.0
+    moving = started and dt != 0
+    for r in range(k):
+        p = rows[r]
+        x0, x1, x2 = X[p, 0], X[p, 1], X[p, 2]
+        x[r, 0], x[r, 1], x[r, 2] = x0, x1, x2
+        d0, d1, d2 = x0 - centre[0], x1 - centre[1], x2 - centre[2]
+        dist = np.sqrt(0.0 + d0 * d0 + d1 * d1 + d2 * d2)
+        rr = max(dist, 1e-300)
+        pen = max(radius - dist, 0.0)
+        fn = penalty * pen
+        d0, d1, d2 = d0 / rr, d1 / rr, d2 / rr
+        g0, g1, g2 = fn * d0, fn * d1, fn * d2
+        if friction > 0:
+            if moving:
+                v0, v1, v2 = (x0 - x_prev[r, 0]) / dt, (x1 - x_prev[r, 1]) / dt, (x2 - x_prev[r, 2]) / dt
+            else:
+                v0 = v1 = v2 = 0.0
+            vn = ((v0 - velocity[0]) * d0 + (v2 - velocity[2]) * d2) + (v1 - velocity[1]) * d1
+            t0, t1, t2 = (v0 - velocity[0]) - vn * d0, (v1 - velocity[1]) - vn * d1, (v2 - velocity[2]) - vn * d2
+            c = friction * fn / np.sqrt(((t0 - 0.0) * t0 + (t2 - 0.0) * t2) + (t1 - 0.0) * t1 + slip2)
+            g0, g1, g2 = g0 - c * t0, g1 - c * t1, g2 - c * t2
+        f[r, 0], f[r, 1], f[r, 2] = g0, g1, g2
+        pen2 += pen * pen
+    for i in range(3):
+        acc = f[0, i] if k else 0.0
+        for r in range(1, k):
+            acc += f[r, i]
+        F[i] = -acc
+    for r in range(k):
+        if f[r, 0] != 0.0 or f[r, 1] != 0.0 or f[r, 2] != 0.0:
+            for i in range(3):
+                Fout[rows[r], i] += f[r, i]
+    if not started:
+        return pen2, 0.0
+    w = f_prev.reshape(3 * k)
+    for r in range(k):
+        for i in range(3):
+            w[3 * r + i] = (f_prev[r, i] + f[r, i]) * (x[r, i] - x_prev[r, i])
+    return pen2, numpy_sum(w)
+
+
+@kernel
+def numpy_sum(a):
+    """np.sum of a contiguous (n,) array with numpy's digits: its reduction takes runs of 8192
+    (the ufunc buffer) in turn, each summed pairwise."""
+    acc = 0.0
+    for lo in range(0, a.shape[0], 8192):
+        acc += pairwise_sum(a, lo, min(8192, a.shape[0] - lo))
+    return acc
+
+
+@kernel
+def pairwise_sum(a, lo, n):
+    """sum of a[lo:lo + n] in the order numpy's add.reduce takes a contiguous run of up to
+    8192: eight partial sums over blocks up to 128, halves (multiples of 8) above."""
+    if n < 8:
+        acc = -0.0
+        for i in range(lo, lo + n):
+            acc += a[i]
+        return acc
+    if n <= 128:
+        r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]
+        r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
+        i = 8
+        while i < n - n % 8:
+            r0, r1, r2, r3 = r0 + a[lo + i], r1 + a[lo + i + 1], r2 + a[lo + i + 2], r3 + a[lo + i + 3]
+            r4, r5, r6, r7 = r4 + a[lo + i + 4], r5 + a[lo + i + 5], r6 + a[lo + i + 6], r7 + a[lo + i + 7]
+            i += 8
+        acc = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+        while i < n:
+            acc += a[lo + i]
+            i += 1
+        return acc
+    half = n // 2
+    half -= half % 8
+    return pairwise_sum(a, lo, half) + pairwise_sum(a, lo + half, n - half)

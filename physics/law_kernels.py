@@ -19,8 +19,9 @@ import os
 
 import numba
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
+from .compiled import kernel
 from .kernels import hoffman_bond, hoffman_bond_aligned
 from .laws import hashin_bond, ply_bond
 
@@ -194,7 +195,7 @@ def _bonds_pass(x, end, loc, d0, normal, area, Kb,
     return 0.5 * work, snapbacks
 
 
-@njit(cache=True)
+@kernel
 def _bond_voigt(pstress, p, q):
     """(6,) Voigt Pa (a tuple): the mean of the particle stresses of p and q."""
     return (0.5 * (pstress[p, 0] + pstress[q, 0]), 0.5 * (pstress[p, 1] + pstress[q, 1]),
@@ -202,7 +203,7 @@ def _bond_voigt(pstress, p, q):
             0.5 * (pstress[p, 4] + pstress[q, 4]), 0.5 * (pstress[p, 5] + pstress[q, 5]))
 
 
-@njit(cache=True)
+@kernel
 def _crosses(sv, n0, n1, n2):
     """Does the bond axis (n0, n1, n2) lie within 45 degrees of the direction of the largest
     principal stress of sv (6,) Voigt (i.e. cross the crack plane)?"""
@@ -240,5 +241,5 @@ def _gather_pass(slots, ptr, entry, rows, f):
 
 
 # each pass twice: on all cores, and serial for the small families
-bonds_pass, bonds_pass_serial = njit(parallel=True, cache=True)(_bonds_pass), njit(cache=True)(_bonds_pass)
-gather_pass, gather_pass_serial = njit(parallel=True, cache=True)(_gather_pass), njit(cache=True)(_gather_pass)
+bonds_pass, bonds_pass_serial = kernel(parallel=True)(_bonds_pass), kernel(_bonds_pass)
+gather_pass, gather_pass_serial = kernel(parallel=True)(_gather_pass), kernel(_gather_pass)

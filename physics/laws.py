@@ -16,7 +16,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
+
+from .compiled import kernel
 
 MIXED_MODE = ("bk", "power")
 
@@ -101,7 +102,7 @@ class HashinCohesiveLaw:
         return t, d
 
 
-@njit(cache=True)
+@kernel
 def hashin_bond(d0, d1, d2, n0, n1, n2, damage, K, Z0, R0, GIc, GIIc, eta, bk):
     """One bond of the law (what ``tractions`` says over arrays): separation (d0, d1, d2) m,
     unit normal (n0, n1, n2), damage so far -> (t0, t1, t2) Pa and the new damage. The one
@@ -132,7 +133,7 @@ def hashin_bond(d0, d1, d2, n0, n1, n2, damage, K, Z0, R0, GIc, GIIc, eta, bk):
     return tn * n0 + ks * s0_, tn * n1 + ks * s1_, tn * n2 + ks * s2_, d
 
 
-@njit(cache=True)
+@kernel
 def _cohesive(delta, normal, damage, K, Z0, R0, GIc, GIIc, eta, bk, t, d_out):
     for b in range(delta.shape[0]):
         t[b, 0], t[b, 1], t[b, 2], d_out[b] = hashin_bond(
@@ -140,7 +141,7 @@ def _cohesive(delta, normal, damage, K, Z0, R0, GIc, GIIc, eta, bk, t, d_out):
             K, Z0, R0, GIc, GIIc, eta, bk)
 
 
-@njit(cache=True)
+@kernel
 def ply_bond(dn, m0, mf, damage, K):
     """One PlyBondLaw bond: opening dn m, onset / final opening m0, mf m (m0 = 0: not
     initiated), damage so far, stiffness K Pa/m -> (normal traction Pa, new damage)."""
@@ -240,7 +241,7 @@ class PlyBondLaw:
         return 0.5 * self.K * ((1 - damage) * np.maximum(dn, 0) ** 2 + np.minimum(dn, 0) ** 2)
 
 
-@njit(cache=True)
+@kernel
 def _ply(dn, m0, mf, damage, K, tn, d):
     for b in range(dn.shape[0]):
         tn[b], d[b] = ply_bond(dn[b], m0[b], mf[b], damage[b], K[b])
