@@ -105,6 +105,9 @@ class Simulation:
     # name -> (time s, capture() -> {field: array}): arrays taken at the first sample at or
     # after that time (damage pictures), returned in the history as "<name>.<field>"
     snapshots: dict[str, tuple[float, Callable[[], dict[str, np.ndarray]]]] = field(default_factory=dict)
+    # brings the orchestrator's copies of models that run elsewhere (an engine's worker) up to
+    # date before anything reads them: samples, frames, checkpoints, the end of the run
+    sync: Callable[[], None] | None = None
     # what the scene could model only with a compromise, or not as well as its checks assume:
     # one line each, printed before the run and kept in summary.json
     warnings: list[str] = field(default_factory=list)
@@ -138,6 +141,8 @@ def run_clock(sim: Simulation, on_sample: Callable[[int, float], None] | None = 
     names = ["time", *sim.probes, "kinetic", "internal", "external_work", "dissipated", "balance_error_rel"]
     hist: dict[str, list[float]] = {k: [] for k in names}
     taken: dict[str, np.ndarray] = {}
+    if sim.sync is not None:
+        sim.sync()
     e0 = sim.energies()
     first = 1
     if resume_from is not None:
@@ -153,7 +158,14 @@ def run_clock(sim: Simulation, on_sample: Callable[[int, float], None] | None = 
 
     scale = [energy_scale(e0) if resume_from is None else float(saved["loop"]["scale"])]
 
+    def sync() -> None:
+        if sim.sync is not None:
+            t0 = clock()
+            sim.sync()
+            timing["transport"] += clock() - t0
+
     def sample(step: int) -> None:
+        sync()
         t0 = clock()
         e = sim.energies()
         scale[0] = max(scale[0], energy_scale(e))
@@ -183,11 +195,13 @@ def run_clock(sim: Simulation, on_sample: Callable[[int, float], None] | None = 
             on_sample(step, values["time"])
 
     def frame(step: int) -> None:
+        sync()
         t0 = clock()
         on_frame(step * sim.dt, sim.fields())
         timing["io"] += clock() - t0
 
     def save(step: int) -> None:
+        sync()
         t0 = clock()
         state, engine_save = sim.checkpoint()
         loop = {"step": step, "e0": e0, "scale": scale[0], "history": {k: np.asarray(v) for k, v in hist.items()},
@@ -211,8 +225,10 @@ def run_clock(sim: Simulation, on_sample: Callable[[int, float], None] | None = 
             if can_save and step % checkpoint_every == 0 and step < sim.n_steps:
                 save(step)
     except Instability as exc:
+        sync()
         exc.partial = _result(hist, _corrected(timing, sim), sim.energies(), step, taken, sim)  # type: ignore[attr-defined]
         raise
+    sync()
     return _result(hist, _corrected(timing, sim), sim.energies(), sim.n_steps, taken, sim)
 
 

@@ -40,6 +40,13 @@ class ParticleImpactor:
         self._F_prev = np.zeros(3)
         self.time = 0.0
 
+    def __getstate__(self) -> dict:
+        """Pickled unbound (the copy binds to the target it is applied on)."""
+        d = dict(self.__dict__)
+        d["_bound"] = None
+        d.pop("_rows", None)
+        return d
+
     def critical_dt(self, particle_mass: np.ndarray) -> float:
         return self.imp.critical_dt(particle_mass[self.ids])
 

@@ -21,6 +21,8 @@ from multiprocessing.connection import Connection
 
 import numpy as np
 
+from dem_region import wire
+
 
 def _attach(name: str, shape) -> tuple[shared_memory.SharedMemory, np.ndarray]:
     shm = shared_memory.SharedMemory(name=name)
@@ -60,8 +62,8 @@ class _Ranks:
         self.told_stop = False
 
     def recv(self):
-        if self.comm is None:
-            return self.conn.recv()
+        if self.comm is None:  # one rank: a core of its own (wire.recv_spinning)
+            return wire.recv_spinning(self.conn)
         if self.root:
             try:
                 msg = self.conn.recv()
@@ -111,15 +113,18 @@ class _Ranks:
 
 def serve(conn: Connection | None, engine: str, comm=None) -> None:
     from dem_region.backends import get_backend
+    from dem_region.model_step import ModelStep, model_states, set_model_states
     from dem_region.scene import DemScene
 
     backend = get_backend(engine)(comm=comm) if comm is not None else get_backend(engine)()
     conn = _Ranks(conn, comm)
     state = {"ids": np.zeros(0, int), "F": None, "V": None, "blocks": [], "in_hook": 0.0,
-             "model_ids": None, "X_model": None, "F_model": None}
+             "model_ids": None, "X_model": None, "F_model": None,
+             "models": [], "view": None, "models_dt": 0.0, "in_models": 0.0, "ask": False}
 
     def between():
-        """The engine's coupling hook: interface forces out, then serve queries until 'go'."""
+        """The engine's coupling hook: the hosted models' step, interface forces out, then serve
+        queries until 'go'."""
         t0 = time.perf_counter()
         try:
             _between()
@@ -127,6 +132,12 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
             state["in_hook"] += time.perf_counter() - t0
 
     def _between():
+        if state["models"]:  # the models this worker hosts, first (the interface forces include theirs)
+            t0 = time.perf_counter()
+            state["view"].run(state["models"], state["models_dt"])
+            state["in_models"] += time.perf_counter() - t0
+        if not state["ask"]:  # the orchestrator has no hook: only the models run here
+            return
         if state["F"] is not None:
             state["F"][:] = backend.forces(state["ids"])
         if state["X_model"] is not None:  # the orchestrator's models read these positions
@@ -166,6 +177,15 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
                 state["F_model"][:] = 0.0
                 backend.read_positions(ids, state["X_model"])
                 conn.send(("ok",))
+            elif op == "host_models":  # the coupling-layer models run here from now on, on the engine's arrays
+                state["models"] = wire.loads(args[0])
+                state["view"] = ModelStep(backend, state["models"])
+                conn.send(("ok",))
+            elif op == "models_state":
+                conn.send(("ok", wire.dumps(model_states(state["models"]))))
+            elif op == "set_models_state":
+                set_model_states(state["models"], wire.loads(args[0]))
+                conn.send(("ok",))
             elif op == "models_flush":  # the orchestrator queries the engine after the models wrote
                 backend.add_forces(state["model_ids"], state["F_model"])
                 state["F_model"][:] = 0.0
@@ -174,12 +194,16 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
                 backend.set_dt(args[0])
                 conn.send(("ok",))
             elif op in ("start", "advance"):
-                hook = between if args[1] else None  # the orchestrator has a hook to run
-                t0, state["in_hook"] = time.perf_counter(), 0.0
+                state["ask"] = bool(args[1])  # the orchestrator has a hook to run
+                hook = between if args[1] or state["models"] else None
+                t0, state["in_hook"], state["in_models"] = time.perf_counter(), 0.0, 0.0
+                # the models' step: none behind the first hook (at start), the engine's after it
+                state["models_dt"] = args[2] if op == "advance" else 0.0
                 for _ in range(args[0] if op == "advance" else 1):
                     getattr(backend, op)(hook)
-                # the engine's own time: the orchestrator separates it from the transport
-                conn.send(("done", time.perf_counter() - t0 - state["in_hook"]))
+                # the engine's own time and the hosted models': the orchestrator separates
+                # them from the transport
+                conn.send(("done", time.perf_counter() - t0 - state["in_hook"], state["in_models"]))
             elif op == "call":  # bulk queries: positions, velocities, energies, forces(ids)
                 out = getattr(backend, args[0])(*args[1:])
                 # plain lists: the two processes may run different numpy versions

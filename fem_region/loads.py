@@ -7,6 +7,8 @@ from typing import Callable
 import numpy as np
 import skfem
 
+from physics.curves import Table
+
 from .explicit import NodalLoad
 from .region import FemRegion
 
@@ -30,7 +32,7 @@ def tabulated(path: str | Path, time_scale: float = 1.0, value_scale: float = 1.
     t, f = np.array(rows).T * [[time_scale], [value_scale]]
     if np.any(np.diff(t) <= 0):
         raise ValueError(f"{path}: times must increase")
-    return lambda s: float(np.interp(s, t, f, left=0.0, right=0.0))
+    return Table(t, f)
 
 
 def sine_squared(peak: float, duration: float) -> Callable[[float], float]:

@@ -200,6 +200,16 @@ class LawBonds:
         loaded = np.flatnonzero(np.any(f != 0.0, axis=1))  # open, failed bonds carry nothing
         backend.add_forces(self.ids[loaded], f[loaded])
 
+    def __getstate__(self) -> dict:
+        """Pickled without the fused step's plan and binding (rebuilt on first use where the
+        copy runs: an engine's worker process)."""
+        d = dict(self.__dict__)
+        d["_plan"], d["_bound"] = None, None
+        d.pop("_rows", None), d.pop("_end", None)
+        if self.force is not None:
+            d["force"] = np.array(self.force)  # a view of the plan's slots
+        return d
+
     # -- the fused step (law_kernels) -----------------------------------------------------------
     def apply(self, target, dt: float) -> None:
         """One step: read the bonded particles' positions, evaluate, add the bond forces. A

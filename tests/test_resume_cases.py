@@ -105,6 +105,23 @@ def test_killed_case_resumes_to_the_uninterrupted_result(tmp_path, case):
     assert not leftovers, leftovers  # no checkpoint, lock, scratch or engine files left in a finished run
 
 
+def test_models_hosted_in_the_lammps_worker_resume_bit_for_bit(tmp_path):
+    """The law bonds and the impactor run inside the LAMMPS worker; a checkpoint takes their
+    state from there and a resume puts it back: killed after the first checkpoint, resumed,
+    the coarse beam's impact equals the uninterrupted run to the bit."""
+    args = ["run", "beam_impact_coarse", "--dem", "lammps", "--set", "clock.t_end=1e-4",
+            "--set", "output.checkpoint_every=1500"]
+    assert (r := _femdem(tmp_path, *args, "--out", "straight")).returncode == 0, r.stderr
+    proc = _femdem(tmp_path, *args, "--out", "killed", wait=False)
+    assert _kill_when(proc, lambda: (tmp_path / "killed.partial" / "checkpoint" / "state.h5").exists())
+    r = _femdem(tmp_path, "run", "--resume", "killed.partial")
+    assert r.returncode == 0, r.stderr
+    a, b = _results(tmp_path / "straight"), _results(tmp_path / "killed")
+    assert a.keys() == b.keys()
+    for k in a:
+        assert _same(a[k], b[k]), k
+
+
 def test_resume_after_the_engine_worker_alone_was_killed(tmp_path):
     """The engine's worker process dies: the run ends with status error and keeps its last
     checkpoint; --resume finishes it to the uninterrupted result."""

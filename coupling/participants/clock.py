@@ -27,6 +27,8 @@ the back-end contract). For DEM step k:
 """
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
 from dem_region.backends.base import DemBackend
@@ -57,7 +59,11 @@ class CoupledClock:
         self.fem, self.dem, self.tie = fem, dem, tie
         # coupling-layer models acting on the engine's particles (LawBonds, ParticleImpactor)
         self.models = list(models)
-        self._model_step = ModelStep(dem, self.models)
+        # in an engine's worker the models run there, on the engine's arrays (only the
+        # interface crosses each step); here they are copies, synced before they are read
+        self.sync_s = 0.0  # s syncing them inside the hook (moved from the fem to the transport bucket)
+        self.hosted = bool(self.models) and hasattr(dem, "host_models") and dem.host_models(self.models)
+        self._model_step = ModelStep(dem, [] if self.hosted else self.models)
         self.m, self.dt = int(substeps), dt_fem
         self.dt_dem = dt_fem / self.m
         self.k = 0  # DEM steps whose forces have been handed over
@@ -77,7 +83,7 @@ class CoupledClock:
         # one DEM step's work inside the engine's hook (after its forces at x_k, before it
         # moves), in this order; each stage is timed (summary.json "stages")
         self.hook_stages = [
-            Stage("laws", "models", self._laws),  # first, so that the interface forces include theirs
+            *([] if self.hosted else [Stage("laws", "models", self._laws)]),  # first: the interface forces include theirs
             Stage("interface.read", "interface", self._read_interface),
             Stage("fem.forces", "fem", self._fem_forces),
             Stage("fem.kick_drift", "fem", self._fem_kick_drift),
@@ -90,7 +96,8 @@ class CoupledClock:
         for stage in self.hook_stages:
             stage.seconds = 0.0
         if hasattr(dem, "transport_s"):
-            dem.transport_s = 0.0
+            dem.transport_s = dem.models_s = 0.0
+        self.sync_s = 0.0
 
     def _between(self) -> None:
         run_stages(self.hook_stages)
@@ -137,6 +144,7 @@ class CoupledClock:
         """Energies, momentum and FEM state at t_n = k dt_dem, all at that time level: the
         leapfrog velocities lag half a step and are completed with the forces at t_n."""
         fem = self.fem
+        self.sync_models()
         self.u_snapshot = fem.state.u.copy()  # the FEM drifts ahead of the engine
         P = np.zeros(3)
         P[: fem.region.dim] = fem.m @ fem.state.v
@@ -158,7 +166,15 @@ class CoupledClock:
     _SCALARS = ("k", "interface_work", "interface_work_snapshot")
     _ARRAYS = ("momentum_snapshot", "u_snapshot", "v_snapshot", "f_tie")
 
+    def sync_models(self) -> None:
+        """The models' copies here equal to the engine worker's (when it hosts them)."""
+        if self.hosted:
+            t0 = time.perf_counter()
+            self.dem.sync_models(self.models)
+            self.sync_s += time.perf_counter() - t0
+
     def checkpoint_state(self) -> dict:
+        self.sync_models()
         d = {"fem": self.fem.checkpoint_state(), "snapshot": dict(self.snapshot),
              **{k: getattr(self, k) for k in self._SCALARS + self._ARRAYS if hasattr(self, k)}}
         if hasattr(self.tie, "_stretch"):
@@ -179,6 +195,8 @@ class CoupledClock:
             self.tie._stretch = np.array(d["tie_stretch"])
         for m, state in zip(self.models, d.get("models", [])):
             m.restore_state(state)
+        if self.hosted:
+            self.dem.set_models_state(d.get("models", []))
         self.dem.restore(engine_checkpoint)
 
     def step(self) -> None:
@@ -200,6 +218,8 @@ class CoupledClock:
         return self.momentum_snapshot
 
     def timing_correction(self) -> dict[str, float]:
-        """A worker's messages and copies, out of the engine's bucket."""
-        transport = getattr(self.dem, "transport_s", 0.0)
-        return {"dem": -transport, "transport": transport}
+        """A worker's messages and copies, and the models it hosts, out of the engine's bucket."""
+        transport, models = getattr(self.dem, "transport_s", 0.0), getattr(self.dem, "models_s", 0.0)
+        # the hosted models' syncs at the ledger's snapshots ran inside the fem.forces stage
+        return {"dem": -transport - models, "transport": transport + self.sync_s, "models": models,
+                "fem": -self.sync_s}

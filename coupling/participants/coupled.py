@@ -111,7 +111,8 @@ def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, st
         guards=fem_guards(fem) + [particles_escaped(backend, scene)],
         checkpoint=(lambda: (clock.checkpoint_state(), lambda d: backend.checkpoint(d / backend.restart_file)))
         if backend.supports_checkpoint else None,
-        restore=lambda state, d: clock.restore_state(state, d / backend.restart_file))
+        restore=lambda state, d: clock.restore_state(state, d / backend.restart_file),
+        sync=clock.sync_models if clock.hosted else None)
     return sim, clock
 
 

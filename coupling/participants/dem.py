@@ -9,57 +9,12 @@ from typing import Callable
 import numpy as np
 
 from dem_region.backends import EngineUnavailable, make_backend
+from dem_region.model_step import ModelStep
 from dem_region.scene import DemScene, gershgorin_dt
-from physics.kernels import add_rows
 
 from ..params import CaseError
 from ..simulation import FieldFrame, Simulation, Stage, run_stages
 from ..timestep import n_steps, time_step
-
-
-class ModelStep:
-    """What the coupling-layer models see of the engine during one hook: the positions of the
-    union of their particles read in one bulk call into ``x`` (k, 3) m, their forces summed in
-    ``f`` (k, 3) N and handed over in one call. Law bonds work on these arrays in place
-    (``rows_of``); impactors and loads through positions_of / add_forces. Engines with array
-    access (``bulk_arrays``) take every row each step (the same ids array: their write plan is
-    built once; a zero row adds nothing); the others only the loaded rows (YADE costs ~1 us per
-    particle per call from Python)."""
-
-    def __init__(self, backend, models):
-        self.backend = backend
-        self.ids = np.unique(np.concatenate([m.ids for m in models])) if models else np.zeros(0, int)
-        self._index = np.full(int(self.ids.max()) + 1 if len(self.ids) else 0, -1)
-        self._index[self.ids] = np.arange(len(self.ids))
-        self.x, self.f = np.zeros((len(self.ids), 3)), np.zeros((len(self.ids), 3))
-        self._read = getattr(backend, "read_positions", None)
-        self._bulk = getattr(backend, "bulk_arrays", False)
-
-    def run(self, models, dt: float) -> None:
-        if not models:
-            return
-        if self._read is not None:
-            self._read(self.ids, self.x)
-        else:
-            self.x[:] = self.backend.positions_of(self.ids)
-        self.f[:] = 0.0
-        for model in models:
-            model.apply(self, dt)
-        if self._bulk:
-            self.backend.add_forces(self.ids, self.f)
-            return
-        loaded = np.flatnonzero(np.any(self.f != 0.0, axis=1))
-        if loaded.size:
-            self.backend.add_forces(self.ids[loaded], self.f[loaded])
-
-    def rows_of(self, ids: np.ndarray) -> np.ndarray:
-        return self._index[np.asarray(ids, int)]
-
-    def positions_of(self, ids: np.ndarray) -> np.ndarray:
-        return self.x[self._index[np.asarray(ids, int)]]
-
-    def add_forces(self, ids: np.ndarray, F: np.ndarray) -> None:
-        add_rows(self.f, self._index[np.asarray(ids, int)], np.ascontiguousarray(F, float).reshape(-1, 3))
 
 
 class PrescribedParticles:
@@ -103,7 +58,9 @@ def dem_only(p: dict, scene: DemScene, dem: str, t_end_default: float,
         n, dt = n_steps(p, t_end_default, min(dt, dt_stable) if dt else time_step(p, dt_stable))
         driver = PrescribedParticles(backend, drive[0], drive[1], dt, drive_dofs) if drive else None
         substages = []  # inside the engine's hook, in order
-        if models:
+        # in an engine's worker the models run there (their copies here synced before reads)
+        hosted = bool(models) and hasattr(backend, "host_models") and backend.host_models(list(models))
+        if models and not hosted:
             view, order = ModelStep(backend, list(models)), list(models)
 
             def laws():
@@ -117,6 +74,8 @@ def dem_only(p: dict, scene: DemScene, dem: str, t_end_default: float,
         backend.start(hook)
         for stage in substages:  # the first hook ran at set-up, outside the clock's stages
             stage.seconds = 0.0
+        if hosted:
+            backend.models_s = backend.transport_s = 0.0
     except NotImplementedError as exc:
         backend.finalize()
         raise CaseError(f"--dem {dem}: {exc}") from None
@@ -149,9 +108,11 @@ def dem_only(p: dict, scene: DemScene, dem: str, t_end_default: float,
         close=backend.finalize, versions={dem: backend.version},
         checkpoint=(lambda: (_state(driver, models, steps), lambda d: backend.checkpoint(d / backend.restart_file)))
         if backend.supports_checkpoint else None,
-        restore=lambda state, d: _restore(state, driver, models, steps, backend, d / backend.restart_file),
-        timing_correction=lambda: {"dem": -getattr(backend, "transport_s", 0.0),
-                                   "transport": getattr(backend, "transport_s", 0.0)})
+        restore=lambda state, d: _restore(state, driver, models, steps, backend, d / backend.restart_file, hosted),
+        timing_correction=lambda: {"dem": -getattr(backend, "transport_s", 0.0) - getattr(backend, "models_s", 0.0),
+                                   "transport": getattr(backend, "transport_s", 0.0),
+                                   "models": getattr(backend, "models_s", 0.0)},
+        sync=(lambda: backend.sync_models(models)) if hosted else None)
     return sim, backend, driver
 
 
@@ -163,10 +124,12 @@ def _state(driver, models, steps) -> dict:
     return d
 
 
-def _restore(d: dict, driver, models, steps, backend, engine_file) -> None:
+def _restore(d: dict, driver, models, steps, backend, engine_file, hosted: bool = False) -> None:
     steps[0] = int(d["hook_steps"])
     for m, state in zip(models, d.get("models", [])):
         m.restore_state(state)
+    if hosted:
+        backend.set_models_state(d.get("models", []))
     if driver:
         driver.k, driver.work = int(d["driver"]["k"]), float(d["driver"]["work"])
     backend.restore(engine_file)

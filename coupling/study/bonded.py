@@ -134,11 +134,10 @@ def load_curve(p: dict, name: str):
             f = fem_loads.tabulated(q["file"], q["time_scale"], q["value_scale"])
         except (OSError, ValueError) as exc:
             raise CaseError(f"loads.{name}.file = {q['file']!r}: {exc}") from None
+        t, F = f.t, f.value
     else:
         t, F = np.array(q["curve"]).T * [[q["time_scale"]], [q["value_scale"]]]
-        f = lambda s: float(np.interp(s, t, F, left=0.0, right=0.0))
-    k = q["scale"]
-    return lambda s: k * f(s)
+    return fem_loads.Table(t, F, q["scale"])
 
 
 # -- the assembly --------------------------------------------------------------------------------

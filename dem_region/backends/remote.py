@@ -7,6 +7,7 @@ a process with the OpenMPI of YADE, LIGGGHTS and mpi4py (ENGINES.md).
 from __future__ import annotations
 
 import os
+import pickle
 import shutil
 import socket
 import tempfile
@@ -20,6 +21,8 @@ from typing import Callable
 
 import numpy as np
 
+from .. import wire
+from ..model_step import set_model_states
 from ..scene import DemScene
 from .base import EngineUnavailable
 
@@ -39,6 +42,10 @@ class RemoteBackend:
         self.ranks = int(ranks)
         self.restart_file = "dem.yade.bz2" if engine == "yade" else "dem.npz"
         self.transport_s = 0.0  # s spent on the transport during start / advance
+        self.models_s = 0.0  # s the models hosted in the worker took (host_models)
+        self.hosts_models = False
+        self._evaluations, self._synced = 0, -1  # hosted models' steps so far, and at the last sync
+        self._dt = 0.0
         env = dict(env if env is not None else os.environ)
         env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
         python = python or sys.executable
@@ -99,7 +106,8 @@ class RemoteBackend:
 
     def _recv(self):
         try:
-            return self.conn.recv()
+            # one rank: the worker and this process each have a core (wire.recv_spinning)
+            return wire.recv_spinning(self.conn) if self.ranks == 1 else self.conn.recv()
         except (EOFError, OSError):
             raise self._died() from None
 
@@ -124,6 +132,40 @@ class RemoteBackend:
 
     def set_dt(self, dt: float) -> None:
         self._call("set_dt", float(dt))
+        self._dt = float(dt)
+
+    def host_models(self, models) -> bool:
+        """Run the coupling layer's models (law bonds, impactors, loads) inside the worker, on
+        the engine's own arrays, so that their particles never cross the process boundary;
+        call before the first start. Only the transition interface then crosses each step;
+        the orchestrator keeps ``models`` as copies brought up to date by ``sync_models``.
+        False (the orchestrator evaluates them, as before) on several ranks, where no rank
+        holds every particle, or when a model does not pickle (a load curve given as a
+        closure)."""
+        if self.ranks > 1 or not models:
+            return False
+        try:
+            payload = wire.dumps(list(models))
+        except (pickle.PicklingError, TypeError, AttributeError):
+            return False
+        try:
+            self._call("host_models", payload)
+        except RuntimeError:  # the worker cannot import a model's class (its venv lacks a module)
+            return False
+        self.hosts_models = True
+        return True
+
+    def sync_models(self, models) -> None:
+        """The orchestrator's copies of the hosted models made equal to the worker's (nothing
+        to do if the models took no step since the last sync)."""
+        if self._synced != self._evaluations:
+            set_model_states(models, wire.loads(self._call("models_state")[1]))
+            self._synced = self._evaluations
+
+    def set_models_state(self, states: list[dict]) -> None:
+        """The hosted models set to ``states`` (model_states form: a checkpoint restored)."""
+        self._call("set_models_state", wire.dumps(states))
+        self._evaluations += 1  # the copies here may differ from the worker's now
 
     def prescribe(self, ids: np.ndarray, dofs: str = "xyz") -> None:
         if dofs != "xyz":  # a partial prescription (symmetry plane): no interface arrays
@@ -138,10 +180,11 @@ class RemoteBackend:
     def _run(self, op: str, between: Callable[[], None] | None, n: int = 1) -> None:
         clock = time.perf_counter
         t0, in_hook = clock(), 0.0
-        self._send((op, n, between is not None))
+        self._send((op, n, between is not None, self._dt))
         while True:
             msg = self._recv()
             if msg[0] == "hook":
+                self._evaluations += 1
                 self._added_here = None  # the worker's F was taken before this hook's additions
                 self._models_pending = False
                 if between is not None:
@@ -150,10 +193,14 @@ class RemoteBackend:
                     in_hook += clock() - t1
                 self._send(("go",))
             elif msg[0] == "done":
+                if between is None:  # the worker's hosted models stepped without telling
+                    self._evaluations += n
                 # waiting minus the worker's engine time: messages, shared-memory copies, the
                 # worker's side of the hook protocol (what an in-process engine does not pay)
                 if len(msg) > 1:
-                    self.transport_s += max(0.0, clock() - t0 - in_hook - float(msg[1]))
+                    models = float(msg[2]) if len(msg) > 2 else 0.0
+                    self.models_s += models
+                    self.transport_s += max(0.0, clock() - t0 - in_hook - float(msg[1]) - models)
                 return
             else:
                 raise RuntimeError(f"{self.name} worker: {msg}")
