@@ -54,6 +54,13 @@ class ModelStep:
         add_rows(self.f, self._index[np.asarray(ids, int)], np.ascontiguousarray(F, float).reshape(-1, 3))
 
 
+def hosted_by(backend, models) -> bool:
+    """True if ``backend`` (an engine in a worker) took ``models`` to run beside its particles;
+    False: the caller evaluates them (an in-process engine, several ranks, a model the worker
+    cannot rebuild)."""
+    return bool(models) and hasattr(backend, "host_models") and backend.host_models(list(models))
+
+
 def model_states(models) -> list[dict]:
     """Each model's state as its checkpoint holds it, plus the last force a probe reads."""
     out = []

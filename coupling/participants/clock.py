@@ -36,7 +36,7 @@ from fem_region.explicit import ExplicitDynamics
 from fem_region.kernels import respa_kicks
 
 from ..simulation import Stage, run_stages
-from .dem import ModelStep
+from .dem import ModelStep, hosted_by
 
 
 def interface_band(region, W) -> np.ndarray:
@@ -62,7 +62,7 @@ class CoupledClock:
         # in an engine's worker the models run there, on the engine's arrays (only the
         # interface crosses each step); here they are copies, synced before they are read
         self.sync_s = 0.0  # s syncing them inside the hook (moved from the fem to the transport bucket)
-        self.hosted = bool(self.models) and hasattr(dem, "host_models") and dem.host_models(self.models)
+        self.hosted = hosted_by(dem, self.models)
         self._model_step = ModelStep(dem, [] if self.hosted else self.models)
         self.m, self.dt = int(substeps), dt_fem
         self.dt_dem = dt_fem / self.m

@@ -9,7 +9,7 @@ from typing import Callable
 import numpy as np
 
 from dem_region.backends import EngineUnavailable, make_backend
-from dem_region.model_step import ModelStep
+from dem_region.model_step import ModelStep, hosted_by
 from dem_region.scene import DemScene, gershgorin_dt
 
 from ..params import CaseError
@@ -59,7 +59,7 @@ def dem_only(p: dict, scene: DemScene, dem: str, t_end_default: float,
         driver = PrescribedParticles(backend, drive[0], drive[1], dt, drive_dofs) if drive else None
         substages = []  # inside the engine's hook, in order
         # in an engine's worker the models run there (their copies here synced before reads)
-        hosted = bool(models) and hasattr(backend, "host_models") and backend.host_models(list(models))
+        hosted = hosted_by(backend, models)
         if models and not hosted:
             view, order = ModelStep(backend, list(models)), list(models)
 

@@ -43,7 +43,6 @@ class RemoteBackend:
         self.restart_file = "dem.yade.bz2" if engine == "yade" else "dem.npz"
         self.transport_s = 0.0  # s spent on the transport during start / advance
         self.models_s = 0.0  # s the models hosted in the worker took (host_models)
-        self.hosts_models = False
         self._evaluations, self._synced = 0, -1  # hosted models' steps so far, and at the last sync
         self._dt = 0.0
         env = dict(env if env is not None else os.environ)
@@ -151,7 +150,6 @@ class RemoteBackend:
             self._call("host_models", payload)
         except RuntimeError:  # the worker cannot import a model's class (its venv lacks a module)
             return False
-        self.hosts_models = True
         return True
 
     def sync_models(self, models) -> None:
