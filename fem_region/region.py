@@ -14,7 +14,7 @@ import skfem
 
 from .elements import ElementType
 from .hourglass import HourglassControl
-from .kernels import VOIGT_2D, VOIGT_3D, total_lagrangian_force
+from .kernels import VOIGT_2D, VOIGT_3D, total_lagrangian_energy, total_lagrangian_force
 from .materials import voigt_blocks
 
 INTEGRATIONS = ("full", "selective", "reduced")
@@ -255,29 +255,10 @@ class FemRegion:
         if self.formulation == "linear":
             x = u.ravel()
             return 0.5 * float(x @ (self.K @ x))
-        energy = sum(0.5 * float(np.einsum("eqij,eqij,eq->", E, S, q.dx))
-                     for q, E, S in self._green_lagrange(u, want_E=True))
+        energy = self._total_lagrangian_pass(u)[0]
         if self.hg is not None and self.hg.form == "stiffness":
             energy += 0.5 * float(np.vdot(self.hg.force(self.hg.k, u[self.mesh.t.T]), u[self.mesh.t.T]))
         return energy
-
-    def _green_lagrange(self, u: np.ndarray, want_E: bool = False):
-        """Per rule: (rule, F or E (nel, nqp, dim, dim), second PK stress S) for the rule's
-        Voigt components (St Venant-Kirchhoff: S = D E)."""
-        dim = self.dim
-        ue = u[self.mesh.t.T]  # (nel, nloc, dim)
-        pairs = [(0, 0), (1, 1), (0, 1)] if dim == 2 else [(0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1)]
-        eng = np.array([1.0 if i == j else 2.0 for i, j in pairs])
-        I, J = np.array(pairs).T
-        for q in self.rules:
-            H = np.einsum("eai,eqaj->eqij", ue, q.dN)
-            F = H + np.eye(dim)
-            E = 0.5 * (H + np.swapaxes(H, -1, -2) + np.swapaxes(H, -1, -2) @ H)
-            Sv = np.einsum("est,eqt->eqs", self._masked_D(q.voigt), E[..., I, J] * eng)
-            S = np.zeros_like(E)
-            S[..., I, J] = Sv
-            S[..., J, I] = Sv
-            yield q, (E if want_E else F), S
 
     def element_strain_energy(self, u: np.ndarray) -> np.ndarray:
         """(nel,) J, small-strain energy 0.5 u_e . k_e u_e of each element."""
@@ -287,12 +268,17 @@ class FemRegion:
     def inverted_elements(self, u: np.ndarray) -> np.ndarray:
         """Indices of elements whose deformation gradient has det F <= 0 at a quadrature point
         (the element turned inside out)."""
-        ue = u[self.mesh.t.T]
-        bad = np.zeros(self.n_elements, bool)
-        for q in self.rules:
-            F = np.einsum("eai,eqaj->eqij", ue, q.dN) + np.eye(self.dim)
-            bad |= (np.linalg.det(F) <= 0).any(axis=1)
-        return np.flatnonzero(bad)
+        return np.flatnonzero(self._total_lagrangian_pass(u)[1] <= 0.0)
+
+    def _total_lagrangian_pass(self, u: np.ndarray) -> tuple[float, np.ndarray]:
+        """(St Venant-Kirchhoff strain energy J, each element's smallest det F (nel,)) at
+        u (n_nodes, dim) m, in one compiled pass per quadrature rule."""
+        uc = np.ascontiguousarray(u, dtype=float)
+        voigt = VOIGT_2D if self.dim == 2 else VOIGT_3D
+        det_min = np.full(self.n_elements, np.inf)
+        energy = sum(total_lagrangian_energy(uc, self._conn, q.dN, q.dx, Dq, voigt, det_min)
+                     for q, Dq in zip(self.rules, self._D_rules))
+        return float(energy), det_min
 
     def centroid_strain_stress(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Small-strain (nel, ns) strain and stress (Pa) at element centroids (Voigt)."""

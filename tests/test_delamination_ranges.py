@@ -4,8 +4,9 @@ Hypothesis samples the material constants, arm thickness, crack length, span, pa
 and substep count inside the ranges `femdem params dcb_coarse` lists, and every sample must
 pass the case's own closed-form checks at the default tolerances. Samples the scene warns
 about (a cohesive zone the closed form cannot describe: the scene says so before it runs) are
-outside the verified domain and are drawn again. The default suite draws a few coarse
-specimens (derandomized: the same draws on every machine); `-m slow` draws more, at random,
+outside the verified domain and are drawn again. The default suite draws one coarse
+specimen of each (derandomized: the same draw on every machine; tests/test_damage.py runs
+the defaults); `-m slow` draws more, at random,
 and on every engine.
 """
 import pytest
@@ -70,7 +71,7 @@ def bending_sets(m, h, L_rel, a_rel, substeps, r=0.25e-3):
 
 
 # no shrinking in the default suite: a failure reports its draw (a run costs 10 to 30 s)
-COARSE = settings(max_examples=2, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.generate],
+COARSE = settings(max_examples=1, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.generate],
                   suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.filter_too_much])
 WIDE = settings(max_examples=6, deadline=None,
                 suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.filter_too_much])
@@ -115,7 +116,7 @@ def fem_sets(case, m, h, L_rel, a_rel, dcb_a, r):
 
 
 @pytest.mark.parametrize("case", ["dcb_coarse", "enf_coarse", "mixed_mode_coarse"])
-@settings(COARSE, max_examples=1)  # one draw per specimen here; more with -m slow
+@COARSE  # one draw per specimen here; more with -m slow
 @given(m=MATERIAL, h=THICK, L_rel=st.floats(1.2, 2.0), a_rel=st.floats(0.4, 0.6), dcb_a=st.floats(1.0, 1.6), r=RADIUS)
 def test_all_fem_specimens_hold_over_their_ranges(femdem, case, m, h, L_rel, a_rel, dcb_a, r):
     """All-FEM (issue #24): the arms meshed apart along the crack plane and joined node to node

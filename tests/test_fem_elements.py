@@ -99,6 +99,39 @@ def test_compiled_element_families_equal_the_generic_kernel(name, integration, s
         assert np.abs(ref).max() > 0
 
 
+@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.data_too_large])
+@given(name=st.sampled_from(["tri3", "quad4", "tet4", "hex8"]), integration=st.sampled_from(["full", "selective"]),
+       scale=st.floats(1e-4, 0.2), seed=st.integers(0, 2**31 - 1))
+def test_total_lagrangian_energy_is_the_potential_of_the_internal_force(name, integration, scale, seed):
+    """The compiled strain energy and the compiled internal force are two kernels: the energy's
+    central difference along any direction is the force's work on it (to the difference's
+    truncation), and under a homogeneous deformation F every element's smallest det F is det F
+    and the energy is E : C : E / 2 times the volume."""
+    e = ELEMENTS[name]
+    m, _ = _mesh(name)
+    rng = np.random.default_rng(seed)
+    C = materials.orthotropic(156e9, 9.09e9, 9.09e9, 0.228, 0.228, 0.4, 5e9, 5e9, 3.2e9)
+    D = materials.plane_strain(C) if e.dim == 2 else C
+    if integration == "selective" and e.dim == 3:
+        integration = "full"
+    r = FemRegion(m, e, D, 1500.0, 1.0, integration, "total_lagrangian")
+    u = scale * rng.standard_normal((r.n_nodes, e.dim)) * 0.05
+    du = rng.standard_normal(u.shape)
+    h = 1e-6 * (scale + 1e-3)
+    dE = (r.strain_energy(u + h * du) - r.strain_energy(u - h * du)) / (2 * h)
+    assert dE == pytest.approx(float(np.vdot(r.internal_force(u), du)), rel=1e-5)
+    F = np.eye(e.dim) + scale * rng.uniform(-1, 1, (e.dim, e.dim))
+    u_affine = r.X @ (F - np.eye(e.dim)).T
+    E = 0.5 * (F.T @ F - np.eye(e.dim))
+    pairs = [(0, 0), (1, 1), (0, 1)] if e.dim == 2 else [(0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1)]
+    Ev = np.array([E[i, j] * (1 if i == j else 2) for i, j in pairs])
+    volume = 0.4 if e.dim == 2 else 0.4 * 0.3
+    assert r.strain_energy(u_affine) == pytest.approx(0.5 * Ev @ D @ Ev * volume, rel=1e-9)
+    det_min = r._total_lagrangian_pass(u_affine)[1]
+    assert np.allclose(det_min, np.linalg.det(F), rtol=1e-9)
+    assert (r.inverted_elements(u_affine).size == r.n_elements) == (np.linalg.det(F) <= 0)
+
+
 def test_stable_step_bounds_bar_wave_speed():
     """1D limit: the element bound is h / c for a lumped-mass bar element."""
     m = skfem.MeshQuad.init_tensor(np.linspace(0, 1, 11), np.linspace(0, 1, 2))

@@ -9,23 +9,27 @@ from physics.laws import HashinCohesiveLaw, friction_traction
 AS4 = HashinCohesiveLaw(K=1e14, Z0=80e6, R0=100e6, GIc=969.0, GIIc=1719.0, eta=2.284)
 
 
-def dissipate(law, direction, n=20000):
+def dissipate(law, direction, n=20000, incremental=True):
     """Drive one bond along a proportional path (dn, ds) = s * direction to full decohesion;
-    returns (work J/m^2, peak tractions, damage)."""
+    returns (work J/m^2, peak tractions, damage). ``incremental=False``: the path's n points as
+    n bonds in one call, each from zero damage; on a monotonic proportional path a point's
+    damage is the path's up to it, so the tractions are the same (irreversibility is tested
+    on the incremental path)."""
     a, b = direction
     m0, mf, _ = law.onset_and_final(np.array([a]), np.array([abs(b)]))
     s = np.linspace(0, 1.2 * mf[0] / np.hypot(max(a, 0), b), n)
-    d = np.zeros(1)
-    work, prev, peak = 0.0, (0.0, 0.0), (0.0, 0.0)
-    for k in range(1, n):
-        tn, ts, d = law.tractions(np.array([a * s[k]]), np.array([[b * s[k]]]), d)
-        cur = (tn[0], ts[0, 0])
-        ds_ = s[k] - s[k - 1]
-        work += 0.5 * ((prev[0] + cur[0]) * a + (prev[1] + cur[1]) * b) * ds_
-        if np.hypot(*cur) > np.hypot(*peak):
-            peak = cur
-        prev = cur
-    return work, peak, d[0]
+    if incremental:
+        d, tn, ts = np.zeros(1), np.zeros(n), np.zeros(n)
+        for k in range(1, n):
+            tk, sk, d = law.tractions(np.array([a * s[k]]), np.array([[b * s[k]]]), d)
+            tn[k], ts[k] = tk[0], sk[0, 0]
+    else:
+        tn, ts, d = law.tractions(a * s, (b * s)[:, None], np.zeros(n))
+        tn, ts, d = tn.copy(), ts[:, 0].copy(), d[-1:]
+        tn[0] = ts[0] = 0.0
+    work = float(np.sum(0.5 * ((tn[1:] + tn[:-1]) * a + (ts[1:] + ts[:-1]) * b) * np.diff(s)))
+    k = int(np.argmax(np.hypot(tn, ts)))
+    return work, (tn[k], ts[k]), d[0]
 
 
 @pytest.mark.parametrize("direction, G", [((1.0, 0.0), 969.0), ((0.0, 1.0), 1719.0)])
@@ -44,7 +48,7 @@ def test_mixed_mode_dissipation_and_initiation(beta, Z0, R0, GIc, ratio, mode):
     """Proportional mixed-mode loading dissipates Gc(B) of the chosen criterion, and the
     traction at onset satisfies Hashin's quadratic criterion."""
     law = HashinCohesiveLaw(K=1e14, Z0=Z0, R0=R0, GIc=GIc, GIIc=ratio * GIc, mixed_mode=mode)
-    work, peak, d = dissipate(law, (1.0, beta), n=6000)
+    work, peak, d = dissipate(law, (1.0, beta), n=6000, incremental=False)
     B = beta**2 / (1 + beta**2)
     assert d == 1.0
     assert work == pytest.approx(float(law.toughness(B)), rel=5e-3)

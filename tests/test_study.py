@@ -152,22 +152,25 @@ def test_the_schema_is_documented_and_docs_cases_md_is_its_output():
 ENGINES = ["liggghts", "lammps", "yade"]
 
 
-@pytest.mark.parametrize("mode, dem", [("fem", None), *[("coupled", e) for e in ENGINES], *[("dem", e) for e in ENGINES]])
+@pytest.mark.parametrize("mode, dem", [*[("coupled", e) for e in ENGINES[1:]], *[("dem", e) for e in ENGINES]])
 def test_a_study_written_only_as_a_case_file_runs_everywhere(femdem, mode, dem):
-    """The three-point bend (tests/studies/): every mode on every engine; the peak deflection
-    against the spring-mass closed form of a simply supported beam, the ledger closed."""
+    """The three-point bend (tests/studies/): every mode on every engine (all-FEM and coupled on
+    LIGGGHTS in test_the_coupled_study_equals_its_all_fem_beam); the peak deflection against
+    the spring-mass closed form of a simply supported beam, the ledger closed."""
     code, s, err = femdem("run", str(BEND), "--mode", mode, *(["--dem", dem] if dem else []))
     assert code == 0, err
     assert_checks(s)
     assert s["scene"] == "three_point_bend" and s["parameters"]["materials.t300_914.E11"] == 130e9
 
 
-@pytest.mark.parametrize("mode, dem", [("fem", None), *[("coupled", e) for e in ENGINES], ("dem", "liggghts"),
-                                       *[pytest.param("dem", e, marks=pytest.mark.slow) for e in ENGINES[1:]]])
+@pytest.mark.parametrize("mode, dem", [("coupled", "lammps"),
+                                       *[pytest.param(*md, marks=pytest.mark.slow)
+                                         for md in [("coupled", "yade"), *[("dem", e) for e in ENGINES]]]])
 def test_a_plate_study_runs_everywhere(femdem, mode, dem):
     """The clamped cross-ply plate under a sphere (tests/studies/), a quarter in 3D: every mode
-    (all-DEM on LAMMPS and YADE with -m slow) against the spring-mass closed form of a clamped
-    orthotropic plate, the ledger closed."""
+    against the spring-mass closed form of a clamped orthotropic plate, the ledger closed.
+    All-FEM and coupled on LIGGGHTS: test_the_coupled_plate_equals_its_all_fem_plate; coupled
+    on YADE and all-DEM (40-50 s each): -m slow (the bend covers every mode on every engine)."""
     code, s, err = femdem("run", str(PLATE), "--mode", mode, *(["--dem", dem] if dem else []))
     assert code == 0, err
     assert_checks(s)
@@ -175,11 +178,13 @@ def test_a_plate_study_runs_everywhere(femdem, mode, dem):
 
 def test_the_coupled_plate_equals_its_all_fem_plate(femdem):
     """The particle column under the sphere and the tie on its two inner faces add no compliance:
-    coupled and all-FEM peak deflections within 3 % (the sphere at 1 m/s)."""
+    coupled and all-FEM peak deflections within 3 % (the sphere at 1 m/s), each run's checks
+    passing."""
     peaks = {}
     for mode in ("fem", "coupled"):
         code, s, err = femdem("run", str(PLATE), "--mode", mode)
         assert code == 0, err
+        assert_checks(s)
         peaks[mode] = s["qoi"]["peak_deflection"]
     assert abs(peaks["coupled"] / peaks["fem"] - 1) < 0.03, peaks
 
@@ -191,6 +196,8 @@ def test_the_coupled_study_equals_its_all_fem_beam(femdem):
     for mode in ("fem", "coupled"):
         code, s, err = femdem("run", str(BEND), "--mode", mode)
         assert code == 0, err
+        assert_checks(s)
+        assert s["scene"] == "three_point_bend" and s["parameters"]["materials.t300_914.E11"] == 130e9
         peaks[mode] = s["qoi"]["peak_deflection"]
         assert s["qoi"].get("delamination_length_0", 0.0) == 0.0
     assert abs(peaks["coupled"] / peaks["fem"] - 1) < 0.03
