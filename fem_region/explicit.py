@@ -108,6 +108,8 @@ class ExplicitDynamics:
         self._prescribed = np.unique(np.concatenate([s.dofs for s in self.supports])) if self.supports else np.zeros(0, int)
         self._u_at_forces, self._t_at_forces, self._dt = zero.copy(), 0.0, 0.0
         self._surface = r.mesh.boundary_nodes() if self.impactors else np.zeros(0, int)
+        for imp in self.impactors:
+            imp.restrict(self._surface)
         self._contact_prev = [(np.zeros((len(self._surface), r.dim)), np.zeros(r.dim)) for _ in self.impactors]
         self._contact_work = 0.0  # net work of the contact forces on both bodies (J)
         self._contact_energy = 0.0  # stored penalty energy (J)

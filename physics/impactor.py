@@ -37,6 +37,11 @@ class RigidImpactor:
     axis: np.ndarray | None = None
     depth: float | None = None
     rounding: float = 0.0  # m, flat shapes: edges rounded by this (a particle radius), see gap
+    # flat shapes on FEM nodes: (n_nodes,) N/m, each node's consistent share of the face's penalty
+    # (penalty per area x the integral of its shape function over the face); None: ``penalty`` on
+    # every node within ``radius``, which on a coarse mesh loads only the nodes that happen to lie
+    # under the face
+    footprint: np.ndarray | None = None
     slip_velocity: float = 1e-3
     x: np.ndarray = field(init=False)
     v: np.ndarray = field(init=False)
@@ -56,6 +61,13 @@ class RigidImpactor:
             ax = np.asarray(self.axis if self.axis is not None else -self.v, float)
             self.axis = ax / np.linalg.norm(ax)
             self.depth = self.depth or self.radius
+        self._k = None  # the footprint on the contact nodes, in the order forces() receives them
+
+    def restrict(self, nodes: np.ndarray) -> None:
+        """The contact nodes' indices (m,) in the order ``forces`` receives them (the footprint's
+        share of each)."""
+        if self.footprint is not None:
+            self._k = np.asarray(self.footprint, float)[nodes]
 
     def gap(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """x: (m, dim) node positions -> (penetration (m,) m >= 0, normal (m, dim) pointing at the node)."""
@@ -71,7 +83,7 @@ class RigidImpactor:
         lateral = np.linalg.norm(lat, axis=1)
         if self.rounding > 0:
             return self._rounded_gap(s, lat, lateral)
-        inside = (s > 0) & (s < self.depth) & (lateral <= self.radius)
+        inside = (s > 0) & (s < self.depth) & ((lateral <= self.radius) if self._k is None else (self._k > 0))
         return np.where(inside, s, 0.0), np.broadcast_to(-self.axis, x.shape)
 
     def _rounded_gap(self, s, lat, lateral):
@@ -100,18 +112,22 @@ class RigidImpactor:
                                 float(self.slip_velocity**2), f)
             return f, 0.5 * self.penalty * pen2
         pen, n = self.gap(x)
-        fn = self.penalty * pen
+        k = self.penalty if self._k is None else self._k
+        fn = k * pen
         f = fn[:, None] * n
         if self.friction > 0:
             vr = v - self.v
             vt = vr - np.einsum("mi,mi->m", vr, n)[:, None] * n
             speed = np.sqrt(np.einsum("mi,mi->m", vt, vt) + self.slip_velocity**2)
             f -= (self.friction * fn / speed)[:, None] * vt
-        return f, 0.5 * self.penalty * float(pen @ pen)
+        return f, 0.5 * (self.penalty * float(pen @ pen) if self._k is None else float(fn @ pen))
 
     def critical_dt(self, node_mass: np.ndarray) -> float:
         """Stable step of the penalty spring between any surface node (m,) kg and the impactor."""
-        w2 = self.penalty * (1.0 / node_mass.min() + 1.0 / self.mass)
+        if self._k is not None:
+            w2 = float(np.max(self._k / node_mass)) + float(self._k.max()) / self.mass
+        else:
+            w2 = self.penalty * (1.0 / node_mass.min() + 1.0 / self.mass)
         return 2.0 / np.sqrt(w2)
 
     def momentum(self) -> np.ndarray:

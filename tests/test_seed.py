@@ -225,32 +225,42 @@ def test_cfrp_beam_impact_coupled_equals_fem_over_its_geometry(femdem, rows, len
     assert abs(peaks["coupled"] / peaks["fem"] - 1) < 0.03, peaks
 
 
+# the all-FEM reference of a coupled rod run: the coarse mesh (one full-integration Hex8 per
+# 12 mm ply, 15 mm across) locks in shear; its peak deflection converges from below (measured at
+# the defaults, 8 / 1, 16 / 2, 24 / 3 elements along the radius / per ply: 9.91, 10.84, 10.97 mm)
+ROD_FEM_REFERENCE = ["--set=mesh.elements_along=16", "--set=mesh.elements_per_ply=2"]
+
+
 def test_rod_impact_coarse_fem_and_coupled(femdem):
     """Seed 5.3, the good setting on the paper-like mesh, all-FEM and coupled (a 3D particle
     zone under the rod: ply lattice, Hashin interface bonds, the rod on the particles; the FEM
     plate around it): each runs to 0.4 ms with its checks (the ledger closes, the peak
-    deflection is near the bending + shear spring-mass estimate), the rod rebounds (it cannot
-    leave faster than it came: the plate and the interface only store or dissipate), and the
-    coupled plate answers as the all-FEM one, an independent model of the same plate: peak
-    deflection, peak layer separation and debonded area within 10 %."""
+    deflection lies in the spring-mass bracket), the rod rebounds (it cannot leave faster than
+    it came: the plate and the interface only store or dissipate), and the coupled plate
+    answers as an all-FEM plate twice as fine (ROD_FEM_REFERENCE), an independent model of the
+    same plate: peak deflection and debonded area within 10 %, peak layer separation 20 %."""
     q = {}
-    for mode in ("fem", "coupled"):
-        code, s, err = femdem("run", "rod_impact_coarse", "--mode", mode, *DEM[mode])
+    for mode in ("fem", "reference", "coupled"):
+        sets = ROD_FEM_REFERENCE if mode == "reference" else []
+        m = "fem" if mode == "reference" else mode
+        code, s, err = femdem("run", "rod_impact_coarse", "--mode", m, *DEM[m], *sets)
         assert code == 0, err
         assert_checks(s)
         assert abs(s["clock"]["t_end"] - 0.4e-3) < 1e-12
         q[mode] = s["qoi"]
         assert -100.0 <= q[mode]["final_rod_velocity"] < 0.0
         assert 0.0 <= q[mode]["debonded_area"] <= q[mode]["damaged_area"] <= 3.1416 * 0.12**2 * 1.0001
-    for key in ("peak_plate_deflection", "peak_layer_separation", "debonded_area"):
-        assert abs(q["coupled"][key] / q["fem"][key] - 1) < 0.10, (key, q)
+    assert q["fem"]["peak_plate_deflection"] < q["reference"]["peak_plate_deflection"]  # locking: stiffer
+    # the layers' separation converges more slowly (16 / 2, 24 / 3: 3.80, 4.19 mm): 20 %
+    for key, tol in (("peak_plate_deflection", 0.10), ("peak_layer_separation", 0.20), ("debonded_area", 0.10)):
+        assert abs(q["coupled"][key] / q["reference"][key] - 1) < tol, (key, q)
 
 
 ROD_RANGES = tomllib.loads((ROOT / "cases" / "seed" / "rod_impact_coarse.toml").read_text())["ranges"]
 _rod_draw = {k.replace(".", "_"): st.floats(*v) for k, v in ROD_RANGES.items()}
 
 
-def _rod_run(femdem, values: dict, mode: str, dem: str = ""):
+def _rod_run(femdem, values: dict, mode: str, dem: str = "", extra=()):
     # coupled: particles of about 3 mm dividing the ply, the zone's half width whole spacings up to
     # twice the rod radius (the largest the case allows)
     tp = values["laminates.plate.ply_thickness"]
@@ -258,7 +268,7 @@ def _rod_run(femdem, values: dict, mode: str, dem: str = ""):
     a = d * np.floor(min(2 * values["impactors.rod.radius"], 0.25 * values["geometry.span"]) / d + 1e-9)
     zone = [f"--set=zone.particle_size={d!r}", f"--set=zone.half_width={a!r}"]
     return femdem("run", "rod_impact_coarse", "--mode", mode, *(["--dem", dem] if dem else []),
-                  *[f"--set={k}={v!r}" for k, v in values.items()], *(zone if mode == "coupled" else []))
+                  *[f"--set={k}={v!r}" for k, v in values.items()], *(zone if mode == "coupled" else []), *extra)
 
 
 @settings(max_examples=2, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.generate],
@@ -266,8 +276,9 @@ def _rod_run(femdem, values: dict, mode: str, dem: str = ""):
 @given(**_rod_draw)
 def test_rod_impact_holds_its_closed_form_over_its_ranges(femdem, **draw):
     """Seed 5.3 all-FEM over the ply moduli and thickness, the plate's diameter and the rod's
-    radius, length and speed (the case's [ranges]): the peak deflection within 35 % of the
-    bending + shear spring-mass estimate, the ledger closed (issue #22)."""
+    radius, length and speed (the case's [ranges]): the peak deflection in the bracket of the
+    intact and delaminated plates' bending + shear spring-mass estimates (35 %; the upper alone
+    for a small-mass impact, which the run says), the ledger closed (issue #22)."""
     values = {k: draw[k.replace(".", "_")] for k in ROD_RANGES}
     code, s, err = _rod_run(femdem, values, "fem")
     assert code == 0, err
@@ -279,16 +290,43 @@ def test_rod_impact_holds_its_closed_form_over_its_ranges(femdem, **draw):
 @given(dem=st.sampled_from(["liggghts", "lammps", "yade"]), **_rod_draw)
 def test_rod_impact_coupled_holds_its_closed_form_over_its_ranges(femdem, dem, **draw):
     """The same draws coupled (the particle zone under the rod, as wide as twice its radius), on
-    the three engines: the check holds and the coupled plate deflects as the all-FEM one
-    within 10 %."""
+    the three engines: the check holds and the coupled plate deflects as the all-FEM one twice
+    as fine (ROD_FEM_REFERENCE) within 10 %."""
     values = {k: draw[k.replace(".", "_")] for k in ROD_RANGES}
     peaks = {}
     for mode in ("fem", "coupled"):
-        code, s, err = _rod_run(femdem, values, mode, dem if mode == "coupled" else "")
+        code, s, err = _rod_run(femdem, values, mode, dem if mode == "coupled" else "",
+                                ROD_FEM_REFERENCE if mode == "fem" else [])
         assert code == 0, err
         assert_checks(s)
         peaks[mode] = s["qoi"]["peak_plate_deflection"]
     assert abs(peaks["coupled"] / peaks["fem"] - 1) < 0.10, (values, peaks)
+
+
+@settings(max_examples=20, deadline=None)
+@given(radius=st.floats(*ROD_RANGES["impactors.rod.radius"]), span=st.floats(*ROD_RANGES["geometry.span"]),
+       along=st.sampled_from([4, 6, 8, 12, 16]))
+def test_the_rod_presses_with_its_whole_face_on_any_mesh(radius, span, along):
+    """The rod's footprint on the coarse disc: the nodes' shares sum to the quarter face's area
+    pi r^2 / 4 whatever the mesh (to the midpoint sums' resolution of the edge), no share
+    exceeds the node's share of a face covering the whole plate (whose shares sum to the
+    surface's area), and no node farther than an element from the face has one; so the
+    contact stiffness is penalty x face area, as the closed forms assume."""
+    from coupling.case import load_case
+    from coupling.study.assemble import laminate
+    from coupling.study.disc import _region, rod_footprint, tributary_area
+    p = load_case("rod_impact_coarse", {"impactors.rod.radius": radius, "geometry.span": span,
+                                        "mesh.elements_along": along}).parameters
+    lam = laminate(p, p["geometry.laminate"])
+    region, _, key = _region(p, lam, core=False)
+    share = rod_footprint(region, key, along, lam.thickness, radius)
+    h = 0.5 * span / along
+    assert share.sum() == pytest.approx(np.pi * radius**2 / 4, rel=3e-3)
+    whole = rod_footprint(region, key, along, lam.thickness, 10 * span)  # a face over the whole plate
+    assert whole.sum() == pytest.approx(tributary_area(p, core=False).sum(), rel=1e-9)
+    assert np.all(share <= whole * (1 + 1e-3))  # the midpoint sums of a covered quad, to 1 / (4 n_sub^2)
+    top = np.flatnonzero(share > 0)
+    assert np.all(np.hypot(*region.X[top, :2].T) < radius + 2 * h)
 
 
 def test_rod_impact_bad_settings_are_caught(femdem):
