@@ -50,6 +50,13 @@ class ParticleImpactor:
     def critical_dt(self, particle_mass: np.ndarray) -> float:
         return self.imp.critical_dt(particle_mass[self.ids])
 
+    def ground_stiffness(self, n: int) -> np.ndarray:
+        """(n,) N/m: the penalty spring the impactor can add to each of n particles (its
+        candidates), on top of their bonds (the stable step's Gershgorin rows)."""
+        g = np.zeros(n)
+        g[self.ids] = self.imp.penalty
+        return g
+
     def apply(self, backend, dt: float) -> None:
         """One engine step: contact forces on the candidates, then the impactor's leapfrog. A
         ball on a target with particle arrays (the coupling layer's ModelStep: ``x``, ``f``,

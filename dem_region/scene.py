@@ -189,11 +189,14 @@ class DemScene:
         return gershgorin_dt(m, self.bonds, np.maximum(self.kn, self.ks))
 
 
-def gershgorin_dt(m: np.ndarray, pairs: np.ndarray, k: np.ndarray) -> float:
+def gershgorin_dt(m: np.ndarray, pairs: np.ndarray, k: np.ndarray, ground: np.ndarray | None = None) -> float:
     """Central-difference stable step (s) of springs k (nb,) N/m on pairs (nb, 2) between
-    masses m (n,) kg: omega_max^2 <= max_i sum_j k_ij (1/m_i + 1/sqrt(m_i m_j))."""
+    masses m (n,) kg, and springs ``ground`` (n,) N/m from each mass to a rigid body (an
+    impactor's penalty): omega_max^2 <= max_i [sum_j k_ij (1/m_i + 1/sqrt(m_i m_j)) + g_i / m_i]."""
     n = len(m)
     i, j = np.asarray(pairs, int).reshape(-1, 2).T
     cross = k / np.sqrt(m[i] * m[j])
     row = np.bincount(i, k / m[i] + cross, n) + np.bincount(j, k / m[j] + cross, n)
+    if ground is not None:
+        row = row + ground / m
     return 2.0 / np.sqrt(row.max()) if row.size and row.max() > 0 else np.inf

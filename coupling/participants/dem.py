@@ -136,16 +136,21 @@ def _restore(d: dict, driver, models, steps, backend, engine_file, hosted: bool 
 
 
 def models_critical_dt(models, scene: DemScene) -> float:
-    """Stable step (s) of the engine's bonds and the coupling layer's law bonds together
-    (their springs add on the same particles; Gershgorin's bound, compressive stiffness),
-    and of impactor penalties."""
+    """Stable step (s) of the engine's bonds, the coupling layer's law bonds and the impactors'
+    penalties on the particles together (their springs add on the same particles: a top
+    particle under a rod carries its bonds and the rod's penalty; Gershgorin's bound,
+    compressive stiffness), and of each impactor's own contact mode."""
     if not models:
         return np.inf
     laws = [b for b in models if hasattr(b, "pairs")]
     others = [m.critical_dt(scene.mass) for m in models if not hasattr(m, "pairs")]
+    ground = np.zeros(scene.n)
+    for m in models:
+        if hasattr(m, "ground_stiffness"):
+            ground += m.ground_stiffness(scene.n)
     pairs = [scene.bonds] + [b.pairs for b in laws]
     k = [np.maximum(scene.kn, scene.ks)] + [np.broadcast_to(b.law.K, (len(b.pairs),)) * b.area for b in laws]
-    return min(gershgorin_dt(scene.mass, np.vstack(pairs), np.concatenate(k)), *others, np.inf)
+    return min(gershgorin_dt(scene.mass, np.vstack(pairs), np.concatenate(k), ground), *others, np.inf)
 
 
 def particles_escaped(backend, scene: DemScene, factor: float = 2.0):
