@@ -80,6 +80,24 @@ def _tl_force_plane(u, conn, dN, dx, D, out, nloc):
                 out[n, 1] += (0.0 + p10 * dN[e, q, a, 0] + p11 * dN[e, q, a, 1]) * w
 
 
+@kernel(inline="always")
+def _green_lagrange(u, conn, dN, voigt, e, q, H, E, dim, nloc, ns):
+    """At quadrature point q of element e: the displacement gradient H = du_i / dX_j (dim, dim)
+    and the Green-Lagrange strain E (ns,) in Voigt form, engineering shear, written in place."""
+    for i in range(dim):
+        for j in range(dim):
+            acc = 0.0
+            for a in range(nloc):
+                acc += u[conn[e, a], i] * dN[e, q, a, j]
+            H[i, j] = acc
+    for s in range(ns):
+        i, j = voigt[s, 0], voigt[s, 1]
+        g = H[i, j] + H[j, i]
+        for k in range(dim):
+            g += H[k, i] * H[k, j]
+        E[s] = 0.5 * g if i == j else g
+
+
 @kernel(inline="always")  # inlined where the sizes are constants, so they fold
 def _tl_force(u, conn, dN, dx, D, voigt, out, dim, nloc, ns):
     nel, nqp = dN.shape[0], dN.shape[1]
@@ -89,18 +107,7 @@ def _tl_force(u, conn, dN, dx, D, voigt, out, dim, nloc, ns):
     P = np.empty((dim, dim))
     for e in range(nel):
         for q in range(nqp):
-            for i in range(dim):
-                for j in range(dim):
-                    acc = 0.0
-                    for a in range(nloc):
-                        acc += u[conn[e, a], i] * dN[e, q, a, j]
-                    H[i, j] = acc
-            for s in range(ns):  # Green-Lagrange strain, engineering shear in Voigt form
-                i, j = voigt[s, 0], voigt[s, 1]
-                g = H[i, j] + H[j, i]
-                for k in range(dim):
-                    g += H[k, i] * H[k, j]
-                E[s] = 0.5 * g if i == j else g
+            _green_lagrange(u, conn, dN, voigt, e, q, H, E, dim, nloc, ns)
             for s in range(ns):
                 acc = 0.0
                 for t in range(ns):
@@ -137,18 +144,7 @@ def total_lagrangian_energy(u, conn, dN, dx, D, voigt, det_min):
     energy = 0.0
     for e in range(nel):
         for q in range(nqp):
-            for i in range(dim):
-                for j in range(dim):
-                    acc = 0.0
-                    for a in range(nloc):
-                        acc += u[conn[e, a], i] * dN[e, q, a, j]
-                    H[i, j] = acc
-            for s in range(ns):  # Green-Lagrange strain, engineering shear (Voigt)
-                i, j = voigt[s, 0], voigt[s, 1]
-                g = H[i, j] + H[j, i]
-                for k in range(dim):
-                    g += H[k, i] * H[k, j]
-                E[s] = 0.5 * g if i == j else g
+            _green_lagrange(u, conn, dN, voigt, e, q, H, E, dim, nloc, ns)
             w = 0.0
             for s in range(ns):
                 acc = 0.0

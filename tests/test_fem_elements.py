@@ -73,6 +73,18 @@ def test_total_lagrangian_is_objective():
     assert np.abs(lin.internal_force(u)).max() > 1e6
 
 
+def _orthotropic_tl(name: str, integration: str):
+    """(element type, Total Lagrangian region on the distorted mesh with an orthotropic ply,
+    its D): selective integration is plane only (full in 3D)."""
+    e = ELEMENTS[name]
+    m, _ = _mesh(name)
+    C = materials.orthotropic(156e9, 9.09e9, 9.09e9, 0.228, 0.228, 0.4, 5e9, 5e9, 3.2e9)
+    D = materials.plane_strain(C) if e.dim == 2 else C
+    if integration == "selective" and e.dim == 3:
+        integration = "full"
+    return e, FemRegion(m, e, D, 1500.0, 1.0, integration, "total_lagrangian"), D
+
+
 @settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.data_too_large])
 @given(name=st.sampled_from(["tri3", "quad4", "tet4", "hex8"]), integration=st.sampled_from(["full", "selective"]),
        scale=st.floats(1e-6, 0.3), seed=st.integers(0, 2**31 - 1))
@@ -81,14 +93,8 @@ def test_compiled_element_families_equal_the_generic_kernel(name, integration, s
     the plane ones in scalars) equals the generic loops bit for bit, from small strain to large
     deformation, on a distorted mesh with an orthotropic material."""
     from fem_region.kernels import VOIGT_2D, VOIGT_3D, total_lagrangian_force, total_lagrangian_force_generic
-    e = ELEMENTS[name]
-    m, _ = _mesh(name)
+    e, r, _ = _orthotropic_tl(name, integration)
     rng = np.random.default_rng(seed)
-    C = materials.orthotropic(156e9, 9.09e9, 9.09e9, 0.228, 0.228, 0.4, 5e9, 5e9, 3.2e9)
-    D = materials.plane_strain(C) if e.dim == 2 else C
-    if integration == "selective" and e.dim == 3:
-        integration = "full"
-    r = FemRegion(m, e, D, 1500.0, 1.0, integration, "total_lagrangian")
     u = scale * rng.standard_normal((r.n_nodes, e.dim))
     voigt = VOIGT_2D if e.dim == 2 else VOIGT_3D
     for q, Dq in zip(r.rules, r._D_rules):
@@ -107,14 +113,8 @@ def test_total_lagrangian_energy_is_the_potential_of_the_internal_force(name, in
     central difference along any direction is the force's work on it (to the difference's
     truncation), and under a homogeneous deformation F every element's smallest det F is det F
     and the energy is E : C : E / 2 times the volume."""
-    e = ELEMENTS[name]
-    m, _ = _mesh(name)
+    e, r, D = _orthotropic_tl(name, integration)
     rng = np.random.default_rng(seed)
-    C = materials.orthotropic(156e9, 9.09e9, 9.09e9, 0.228, 0.228, 0.4, 5e9, 5e9, 3.2e9)
-    D = materials.plane_strain(C) if e.dim == 2 else C
-    if integration == "selective" and e.dim == 3:
-        integration = "full"
-    r = FemRegion(m, e, D, 1500.0, 1.0, integration, "total_lagrangian")
     u = scale * rng.standard_normal((r.n_nodes, e.dim)) * 0.05
     du = rng.standard_normal(u.shape)
     h = 1e-6 * (scale + 1e-3)
