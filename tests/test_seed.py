@@ -265,7 +265,8 @@ def _rod_run(femdem, values: dict, mode: str, dem: str = "", extra=()):
     # twice the rod radius (the largest the case allows)
     tp = values["laminates.plate.ply_thickness"]
     d = tp / round(tp / 3e-3)
-    a = d * np.floor(min(2 * values["impactors.rod.radius"], 0.25 * values["geometry.span"]) / d + 1e-9)
+    a_max = min(2 * values["impactors.rod.radius"], 0.25 * values["geometry.span"])
+    a = min(d * np.floor(a_max / d + 1e-9), a_max)  # whole spacings, never a rounding above the limit
     zone = [f"--set=zone.particle_size={d!r}", f"--set=zone.half_width={a!r}"]
     return femdem("run", "rod_impact_coarse", "--mode", mode, *(["--dem", dem] if dem else []),
                   *[f"--set={k}={v!r}" for k, v in values.items()], *(zone if mode == "coupled" else []), *extra)
