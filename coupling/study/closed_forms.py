@@ -122,7 +122,8 @@ def disc_mass_ratio(study, p: dict) -> float:
     lam = laminate(p, p["geometry.laminate"])
     (imp,) = study.layout.names["impactors"]
     q = section(p, f"impactors.{imp}")
-    return q["rho"] * q["radius"] ** 2 * q["length"] / (lam.ply["rho"] * lam.thickness * (0.5 * p["geometry.span"]) ** 2)
+    plate = lam.ply["rho"] * lam.thickness * (0.5 * p["geometry.span"]) ** 2
+    return q["rho"] * q["radius"] ** 2 * q["length"] / plate  # pi cancels
 
 
 def disc_spring_mass_bracket(study, p: dict, f: dict | None = None) -> tuple[float, float]:

@@ -121,10 +121,10 @@ def rod_footprint(region: FemRegion, key: np.ndarray, n: int, H: float, r: float
     """(n_nodes,) m^2: each top-surface node's share (the surface at z = H, grid keys ``key`` of
     the (n + 1)^2 surface grid) of the face of a rod of radius r, the integral of its
     shape function over the part of its quads (bilinear, as the elements are) inside the rod's
-    radius, by midpoint sums on cells of at most r / 40 (n_sub x n_sub per quad); 0 elsewhere. Sums to the quarter
-    face's area (to the sums' resolution of its edge), whatever the mesh: a rod whose radius
-    falls between node rings still presses with its whole face (on the coarse mesh a 17.7 mm
-    rod covered one node and inverted its element)."""
+    radius, by midpoint sums on cells of at most r / 40 (n_sub x n_sub per quad); 0 elsewhere.
+    Sums to the quarter face's area (to the sums' resolution of its edge), whatever the mesh:
+    a rod whose radius falls between node rings still presses with its whole face (on the
+    coarse mesh a 17.7 mm rod covered one node and inverted its element)."""
     top = np.flatnonzero(np.abs(region.X[:, 2] - H) < 1e-9 * H)
     xy = np.full(((n + 1) ** 2, 2), np.nan)
     xy[key[top]] = region.X[top, :2]
