@@ -17,6 +17,7 @@ from .assemble import beam, plate
 from .bonded import bonded_beam
 from .disc import disc
 from .panel import panel as assemble_panel
+from .placement import place
 from .schema import BONDED, LAMINATED, MODES, document, parameters
 
 __all__ = ["Study", "document_schema", "renamed"]
@@ -53,7 +54,7 @@ class Study:
         self.no_fracture_reference = meta.get("no_fracture_reference", False)
         if not isinstance(self.no_fracture_reference, bool):
             raise CaseError(f"case.no_fracture_reference = {self.no_fracture_reference!r}: allowed true or false")
-        self._no_fracture = {}
+        self._no_fracture, self._placed = {}, {}
         self._shape_tables(shape, data)
         want = {"beam": ("x", "quad4"), "beam_3d": ("xy", "hex8"), "plate": ("xy", "hex8"), "disc": ("xy", "hex8"),
                 "bonded_beam": ("x", "quad4"), "bonded_beam_3d": ("xy", "hex8"), "panel": ("none", "quad4")}[shape]
@@ -140,6 +141,8 @@ class Study:
                 raise CaseError(f"[{table}.{next(iter(names[table]))}]: geometry.shape = {shape!r} takes none")
         if shape in ("beam", "bonded_beam"):
             refuse.append(("mesh", "elements_width"))
+        if shape not in ("beam", "beam_3d"):  # a zone about x = 0 placed from the estimate: beams'
+            refuse += [("zone", k) for k in ("placement", "grow_at", "margin")]
         if shape != "beam":
             if given("mesh", "file"):
                 raise CaseError(f"mesh.file: read for geometry.shape = 'beam' only so far; allowed for {shape!r}: "
@@ -176,7 +179,7 @@ class Study:
         """The history of this study's all-FEM twin (no fracture), run once per parameter set:
         the reference of the cracking checks and of no_fracture_reference."""
         from ..simulation import run_clock
-        key = tuple(sorted((k, v) for k, v in p.items() if not k.startswith(("output.", "dem.", "coupling."))))
+        key = _physics_key(p)
         if key not in self._no_fracture:
             q = dict(p, **{"clock.dt": 0.0, "output.field_frames": 0})
             self._no_fracture[key] = run_clock(self.build(q, "fem", ""))["history"]
@@ -189,10 +192,25 @@ class Study:
         return table in KIND_KEY and rest.count(".") == 1 and rest.endswith("." + KIND_KEY[table][0]) \
             or key in ("geometry.shape", "zone.shape", "geometry.symmetry")
 
+    def placement(self, p: dict, mode: str):
+        """The zone placed from the all-FEM estimate (zone.placement = "auto", coupled mode), once
+        per parameter set; None otherwise."""
+        if mode != "coupled" or p.get("zone.placement", "box") != "auto":
+            return None
+        key = _physics_key(p)
+        if key not in self._placed:
+            self._placed[key] = place(self, p)
+        return self._placed[key]
+
     def build(self, p: dict, mode: str, dem: str):
         assemble = {"plate": plate, "disc": disc, "bonded_beam": bonded_beam, "bonded_beam_3d": bonded_beam,
                     "panel": assemble_panel}
+        placed = self.placement(p, mode)
+        if placed is not None:
+            p = dict(p, **{"zone.half_width": placed.half_width})
         sim, built = assemble.get(p["geometry.shape"], beam)(self, p, mode, dem)
+        if placed is not None:
+            sim.warnings += placed.warnings
         sim.probes.update(probes.series(self, built, p))
         size = float(built.fem_elements + (built.lattice.n if built.lattice is not None else built.particles))
         sim.probes["model_size"] = lambda: size  # elements + particles
@@ -213,6 +231,9 @@ class Study:
                     history[f"no_fracture.{name}"] = ref[name]
                     qoi[f"peak_{name}_no_fracture"] = float(np.max(ref[name]))
                     qoi[f"{name}_change_by_fracture"] = qoi[f"peak_{name}"] / qoi[f"peak_{name}_no_fracture"] - 1
+        placed = self.placement(p, mode)
+        if placed is not None:
+            qoi.update(placed.qoi())
         if self.reference_elements:
             qoi["model_size_vs_reference"] = qoi["model_size"] / self.reference_elements
         return qoi, closed_forms.evaluate(self, p, qoi, history)
@@ -225,6 +246,11 @@ class Study:
             return
         plots.histories(self, p, history, qoi, plots_dir)
         plots.damage(history, plots_dir)
+
+
+def _physics_key(p: dict) -> tuple:
+    """The parameters that decide a run's physics (not its output, engine or coupling)."""
+    return tuple(sorted((k, v) for k, v in p.items() if not k.startswith(("output.", "dem.", "coupling."))))
 
 
 def _damage_snapshots(sim, built) -> None:

@@ -111,18 +111,39 @@ def _ply_crack_series(built, name, f):
 
 
 def _zone_edge_series(built, name, f):
-    """The largest interlaminar (or adhesive) damage in the last ``columns`` columns before the
-    zone's edge, and on a bonded beam also of the body's bonds with both ends there: near 1,
-    the damage reached the edge and the zone must widen."""
+    """The largest damage in the last ``columns`` columns before the zone's edge that the far
+    field cannot carry on: the interlaminar (or adhesive) bonds', unless the far field's plies
+    are cohesive (a delamination runs on into them), and the body's or plies' bonds with both
+    ends there (bonded beams; laminates whose plies fail). Near 1: the damage reached the edge
+    and the zone must widen."""
     if built.inter is None:
         return {}
-    inter, column = built.inter, built.column
-    edge = column[inter.pairs[:, 0]] >= column.max() - f["columns"]
-    if getattr(built, "edge_intra", False):
-        body = built.intra
-        edge_b = column[body.pairs].min(axis=1) >= column.max() - f["columns"]
-        return {name: lambda: float(max(inter.damage[edge].max(), body.damage[edge_b].max()))}
-    return {name: lambda: float(inter.damage[edge].max()) if edge.any() else 0.0}
+    column, last = built.column, built.column.max() - f["columns"]
+    families = [] if built.node_bonds is not None else [(built.inter, column[built.inter.pairs[:, 0]] >= last)]
+    plies_fail = built.lam is not None and not built.lam.elastic
+    if getattr(built, "edge_intra", False) or plies_fail:
+        families.append((built.intra, column[built.intra.pairs].min(axis=1) >= last))
+    families = [(b, edge) for b, edge in families if edge.any()]
+    return {name: lambda: max((float(b.damage[edge].max()) for b, edge in families), default=0.0)}
+
+
+def _far_field_series(built, name, f):
+    """The largest failure indices over the FEM's elements now (1 at initiation): Hoffman's
+    ply index and Hashin's interlaminar index from each element's centroid strain and ply
+    (study/fields.FemIndices); the FEM cannot fail, so a peak at 1 or more is damage the
+    model leaves out. No series without a FEM or a laminate."""
+    dyn = built.dyn
+    if dyn is None or built.lam is None:
+        return {}
+    from .fields import FemIndices
+    indices, now = FemIndices(dyn.region, built.lam, built.dim), {}
+
+    def evaluate(which: int) -> float:
+        if which == 0:  # both indices from one strain evaluation per sample
+            now["hashin"], now["hoffman"] = indices(dyn.region.centroid_strain_stress(dyn.state.u)[0])
+        return float(np.max(now["hoffman" if which == 0 else "hashin"]))
+
+    return {f"{name}_hoffman": lambda: evaluate(0), f"{name}_interlaminar": lambda: evaluate(1)}
 
 
 def first_time(time: np.ndarray, series: np.ndarray) -> float:
@@ -263,9 +284,16 @@ PROBES: dict[str, ProbeKind] = {
         {"angle": Param("90", "ply angle, or all", kind="str", choices=("0", "90", "all"))},
         _ply_crack_series, _final_qoi(("{name}",))),
     "zone_edge_damage": ProbeKind(
-        "largest interlaminar damage near the zone's edge (1: the zone is too narrow); qoi: its maximum",
+        "largest damage near the zone's edge that the far field cannot carry on (1: the zone is too narrow): "
+        "interlaminar (tied far-field plies) and the plies' own; qoi: its maximum",
         {"columns": Param(2, "particle columns counted from the edge", kind="int", low=0, high=100)},
         _zone_edge_series, _max_qoi),
+    "far_field_failure": ProbeKind(
+        "the largest failure indices in the FEM (1 at initiation; the FEM cannot fail, so 1 or more is damage the "
+        "model leaves out); qoi peak_NAME_hoffman, peak_NAME_interlaminar",
+        {}, _far_field_series,
+        _when("{name}_hoffman")(lambda name, f, h: {f"peak_{name}_{c}": float(np.max(h[f"{name}_{c}"]))
+                                                     for c in ("hoffman", "interlaminar")})),
     "impactor_motion": ProbeKind(
         "an impactor's velocity into the structure and its face's travel; qoi final_NAME_velocity",
         {"impactor": Param("", "the impactor (an [impactors.*] name)", kind="str")},

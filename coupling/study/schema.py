@@ -270,6 +270,15 @@ SECTIONS: dict[str, dict[str, Param]] = {
         "shape": Param("box", "box: |x| <= half_width (a plate: and |y| <= half_width) through the whole "
                        "thickness", kind="str", choices=("box",)),
         "half_width": positive(REQUIRED, "half width of the DEM zone about x = 0 (coupled mode)", "m"),
+        "placement": Param("box", "box: the zone is half_width wide; auto (beams): placed from the study's all-FEM "
+                           "run, the impactor's contact patch and every element reached from it whose failure index "
+                           "reaches grow_at (Hoffman; Hashin interlaminar too with tied far-field plies), plus "
+                           "margin (study/placement.py; half_width is then unused)", kind="str",
+                           choices=("box", "auto")),
+        "grow_at": Param(0.5, "auto placement: the failure index (1 at initiation) that puts an element in the zone",
+                         low=0.05, high=2.0),
+        "margin": Param(0.0, "auto placement: the zone's margin beyond the flagged elements, and the widest gap "
+                        "between them it bridges; 0: four particle sizes", unit="m", low=0.0),
         "plies_per_particle": Param(1, "plies per particle row (the particle size is this x ply thickness; "
                                     "laminates)", kind="int", low=1, high=8),
         "particle_size": Param(0.0, "lattice spacing d (bonded beams: the depth holds a whole number of rows; a "
