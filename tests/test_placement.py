@@ -3,7 +3,7 @@ the growth rule against a brute-force fixed point, the decision's refusals and w
 made-up estimates, and a placed zone that gives the all-DEM beam's answer."""
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, Phase, given, settings
+from hypothesis import HealthCheck, Phase, example, given, settings
 from hypothesis import strategies as st
 
 from coupling.params import CaseError
@@ -43,26 +43,26 @@ def _estimate(profile, length=1e-3, contact=0.0):
 
 def test_the_zone_holds_the_flagged_elements_and_its_margin_in_whole_particles():
     d, L = 0.3e-3, 25e-3
-    placed = decide(_estimate([0.9, 0.8, 0.6, 0.4, 0.2] + [0.1] * 20), d, L, grow_at=0.5, margin=0.0)
+    placed = decide(_estimate([0.9, 0.8, 0.6, 0.4, 0.2] + [0.1] * 20), d, L, grow_at=0.5, margin=1.2e-3)
     assert placed.reach == pytest.approx(3e-3)
     w = placed.half_width
-    assert w >= 3e-3 + 4 * d and w - (3e-3 + 4 * d) < d  # the default margin, rounded up
+    assert w >= 3e-3 + 1.2e-3 and w - (3e-3 + 1.2e-3) < d  # the margin, rounded up
     assert abs(w / d - round(w / d)) < 1e-9
     assert not placed.warnings
 
 
 def test_an_impact_that_flags_nothing_keeps_the_contact_patch_and_a_punch_on_particles():
     d = 0.3e-3
-    assert decide(_estimate([0.1] * 25, contact=0.2e-3), d, 25e-3, 0.5, 0.0).half_width == \
-        pytest.approx(np.ceil((0.2e-3 + 4 * d) / d - 1e-9) * d)
+    assert decide(_estimate([0.1] * 25, contact=0.2e-3), d, 25e-3, 0.5, 1.2e-3).half_width == \
+        pytest.approx(np.ceil((0.2e-3 + 1.2e-3) / d - 1e-9) * d)
     punch = 2e-3
-    w = decide(_estimate([0.1] * 25), d, 25e-3, 0.5, 0.0, punch=punch).half_width
+    w = decide(_estimate([0.1] * 25), d, 25e-3, 0.5, 1e-4, punch=punch).half_width
     assert w >= punch + 2 * d
 
 
 def test_a_flagged_region_apart_from_the_impact_is_left_to_the_far_field_with_a_warning():
     profile = [0.9, 0.7] + [0.1] * 15 + [1.2, 1.1] + [0.1] * 6  # a clamp's bending near x = 18 mm
-    placed = decide(_estimate(profile), 0.3e-3, 25e-3, 0.5, 0.0)
+    placed = decide(_estimate(profile), 0.3e-3, 25e-3, 0.5, 2.4e-3)
     assert placed.half_width < 5e-3
     assert len(placed.warnings) == 1 and "Hoffman index at 1.20 at x = 17.5 mm" in placed.warnings[0]
     assert placed.peak == pytest.approx(1.2)
@@ -70,7 +70,7 @@ def test_a_flagged_region_apart_from_the_impact_is_left_to_the_far_field_with_a_
 
 def test_a_zone_the_box_cannot_hold_is_refused_with_what_would_fit():
     with pytest.raises(CaseError, match=r"zone.placement = 'auto'.*out to x = 21 mm.*allowed at most 0.8 x half"):
-        decide(_estimate([0.9] * 21 + [0.1] * 4), 0.3e-3, 25e-3, 0.5, 0.0)
+        decide(_estimate([0.9] * 21 + [0.1] * 4), 0.3e-3, 25e-3, 0.5, 1.2e-3)
 
 
 def test_a_tied_far_field_that_delaminates_everywhere_is_refused_before_anything_is_written(femdem, tmp_path):
@@ -107,12 +107,17 @@ def placed_against_all_dem(femdem, dem, span, radius, velocity, mass):
     return runs
 
 
-def _assert_placed_zone_gives_all_dem(coupled, dem, d=0.3e-3):
-    margin = 4 * d
+def _assert_placed_zone_gives_all_dem(coupled, dem, H=2.4e-3):
+    margin = H  # the laminate's thickness, above 4 particle sizes (1.2 mm)
     assert coupled["zone_estimate_reach"] + margin <= coupled["zone_half_width"] + 1e-12
-    for qoi in ("peak_centre_displacement", "peak_contact_force"):
-        assert abs(coupled[qoi] / dem[qoi] - 1) < 0.06, (qoi, coupled[qoi], dem[qoi])
+    # the contact chatters (the cylinder leaves and strikes again): its largest spike differs by
+    # up to 20 % between models whose impulse agrees to 1.5 % (a 12 mm hand-drawn zone: 12 %)
+    for qoi, tol in (("peak_centre_displacement", 0.06), ("contact_force_impulse", 0.05), ("peak_contact_force", 0.25)):
+        assert abs(coupled[qoi] / dem[qoi] - 1) < tol, (qoi, coupled[qoi], dem[qoi])
     assert coupled["damage_at_zone_edge"] == 0.0  # no damage the far field cannot carry reached the edge
+    debonded = [max((k for k in q if k.startswith("delamination_length_")), key=q.get) for q in (coupled, dem)]
+    if dem[debonded[1]] > 0:  # the interface that debonds is the all-DEM one's
+        assert debonded[0] == debonded[1], (coupled, dem)
 
 
 @settings(max_examples=1, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.generate],
@@ -120,14 +125,16 @@ def _assert_placed_zone_gives_all_dem(coupled, dem, d=0.3e-3):
 @given(**BEAM)
 def test_a_placed_zone_gives_the_all_dem_beam_over_its_ranges(femdem, span, radius, velocity, mass):
     """The coarse seed beam anywhere in its documented ranges, coupled with the zone placed from
-    its all-FEM estimate: peak deflection and contact force within 6 % of the all-DEM beam (the
-    hand-drawn 12 mm zone: 4.5 % at the defaults), no damage the far field cannot carry at the
-    zone's edge."""
+    its all-FEM estimate: peak deflection within 6 % and the contact's impulse within 5 % of the
+    all-DEM beam's (the hand-drawn 12 mm zone: 4.5 % and 0.4 % at the defaults), no damage the
+    far field cannot carry at the zone's edge, and the interface that debonds is the all-DEM
+    one's."""
     _assert_placed_zone_gives_all_dem(*placed_against_all_dem(femdem, "liggghts", span, radius, velocity, mass))
 
 
 @pytest.mark.slow
 @settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(**BEAM, dem=st.sampled_from(["yade", "liggghts", "lammps"]))
+@example(span=25e-3, radius=5e-3, velocity=12.0, mass=1.0, dem="liggghts")  # the plies crack: the zone grows
 def test_a_placed_zone_gives_the_all_dem_beam_on_every_engine(femdem, span, radius, velocity, mass, dem):
     _assert_placed_zone_gives_all_dem(*placed_against_all_dem(femdem, dem, span, radius, velocity, mass))

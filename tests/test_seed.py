@@ -490,11 +490,13 @@ def test_a_cohesive_far_field_dissipates_what_its_debonded_area_costs(femdem, ca
         (whole, debonded, damaged)
 
 
+@pytest.mark.slow
 def test_a_cohesive_far_field_brings_the_coupled_beam_to_the_all_dem_one(femdem):
     """Seed 5.1 coarse on LIGGGHTS: with the far field able to delaminate, the coupled beam's peak
     centre deflection and contact force come within 6 % of the all-DEM beam's (an independent
     model of the same beam; with the plies sharing nodes the deflection is 21 % off), and the
-    interface that debonds is the all-DEM one's."""
+    interface that debonds is the all-DEM one's. (The default suite asserts the same with the
+    zone placed, over the beam's ranges: tests/test_placement.py.)"""
     runs = {}
     for mode, extra in (("dem", []), ("coupled", COHESIVE)):
         code, s, err = femdem("run", "beam_impact_coarse", "--mode", mode, "--dem", "liggghts", *extra)

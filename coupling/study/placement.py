@@ -69,9 +69,9 @@ class Estimate:
     wall: float
 
 
-def estimate(study, p: dict) -> tuple[Estimate, float, float]:
-    """(Estimate, particle size d (m), half span L (m)) of ``p``'s all-FEM run (a beam or
-    beam_3d study) over the run's duration."""
+def estimate(study, p: dict) -> tuple[Estimate, float, float, float]:
+    """(Estimate, particle size d, half span L, laminate thickness H; m) of ``p``'s all-FEM
+    run (a beam or beam_3d study) over the run's duration."""
     from ..simulation import Instability, run_clock
     from .assemble import beam
 
@@ -108,19 +108,18 @@ def estimate(study, p: dict) -> tuple[Estimate, float, float]:
         sim.close()
     X = region.X[region.mesh.t.T][:, :, 0]  # (nel, nodes) x of each element's nodes
     return Estimate(X.min(axis=1), X.max(axis=1), peaks, contact[0], time.perf_counter() - t0), built.t, \
-        built.half_span
+        built.half_span, built.lam.thickness
 
 
 def decide(est: Estimate, d: float, L: float, grow_at: float, margin: float, punch: float = 0.0,
            far_field: str = "") -> Placement:
     """The zone from an estimate: the box about the impact holding the contact patch (or a
     punch's face, half width ``punch`` m, and two particles beyond) and every element reached
-    from it whose index reaches ``grow_at``, plus ``margin`` (m; 0: 4 d), in whole particle
-    spacings d (m). Refused (CaseError) when that is not below 0.8 L (the half span, m);
+    from it whose index reaches ``grow_at``, plus ``margin`` (m), in whole particle spacings
+    d (m). Refused (CaseError) when that is not below 0.8 L (the half span, m);
     ``far_field``: the setting that lets a tied far field delaminate, named in the refusal."""
     criteria = list(est.peaks)
     index = np.max([est.peaks[c] for c in criteria], axis=0) if criteria else np.zeros(len(est.x0))
-    margin = margin or 4 * d
     flagged = index >= grow_at
     start = max(est.contact, punch)
     reach = grown_reach(est.x0[flagged], est.x1[flagged], start, margin)
@@ -147,7 +146,10 @@ def decide(est: Estimate, d: float, L: float, grow_at: float, margin: float, pun
 
 def place(study, p: dict) -> Placement:
     """The zone of the coupled run of ``p`` (a beam or beam_3d study) from its all-FEM estimate."""
-    est, d, L = estimate(study, p)
+    est, d, L, H = estimate(study, p)
+    # a contact's own stress field decays over about the laminate's thickness (Saint-Venant):
+    # the tie stays outside it (a 4-particle margin let the coupled beam crack plies at its edge)
+    margin = p["zone.margin"] or max(4 * d, H)
     punch = max((p.get(f"impactors.{n}.half_width", 0.0) for n in study.layout.names["impactors"]), default=0.0)
     far_field = f"laminates.{p['geometry.laminate']}.far_field_interfaces = 'cohesive'"
-    return decide(est, d, L, p["zone.grow_at"], p["zone.margin"], punch, far_field)
+    return decide(est, d, L, p["zone.grow_at"], margin, punch, far_field)

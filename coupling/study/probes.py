@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
+from scipy.integrate import trapezoid
 
 from ..params import CaseError, Param, positive
 from .panel import buckling_qoi, buckling_series, growth_qoi, growth_series
@@ -272,9 +273,11 @@ PROBES: dict[str, ProbeKind] = {
          "component": Param("-y", "component (a leading - reverses it); z in 3D", kind="str", choices=_COMPONENTS)},
         _point_series, _peak_qoi),
     "contact_force": ProbeKind(
-        "force between an impactor and the structure (whole width), and the impactor's velocity; qoi peak_NAME",
+        "force between an impactor and the structure (whole width), and the impactor's velocity; qoi peak_NAME, "
+        "NAME_impulse (its time integral, N s: robust where the peak is a chattering contact's largest spike)",
         {"impactor": Param("", "the impactor (an [impactors.*] name)", kind="str")},
-        _contact_series, lambda name, f, h: {f"peak_{name}": float(np.max(h[name]))}),
+        _contact_series, lambda name, f, h: {f"peak_{name}": float(np.max(h[name])),
+                                             f"{name}_impulse": float(trapezoid(h[name], h["time"]))}),
     "delamination": ProbeKind(
         "debonded area (NAME_area_K), debonded and damaged lengths (NAME_length_K, damaged_interface_length_K: "
         "area / width) of each ply interface K, bottom up, whole structure; qoi: their final values",
