@@ -22,6 +22,7 @@ from multiprocessing.connection import Connection
 import numpy as np
 
 from dem_region import wire
+from dem_region.doorbell import ADVANCE, ASK, DONE, DT, ENGINE_S, GO, HOOK, MODELS_S, STEPS, Backoff, Doorbell
 
 
 def _attach(name: str, shape) -> tuple[shared_memory.SharedMemory, np.ndarray]:
@@ -90,6 +91,10 @@ class _Ranks:
         if self.root:
             self.conn.send(msg)
 
+    def poll(self) -> bool:
+        """A message from the orchestrator is waiting (rank 0)."""
+        return self.conn.poll(0)
+
     def _to_ranks(self, msg) -> None:
         self.told_stop = self.told_stop or _is_eof(msg)
         for rank in range(1, self.comm.Get_size()):
@@ -120,7 +125,8 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
     conn = _Ranks(conn, comm)
     state = {"ids": np.zeros(0, int), "F": None, "V": None, "blocks": [], "in_hook": 0.0,
              "model_ids": None, "X_model": None, "F_model": None,
-             "models": [], "view": None, "models_dt": 0.0, "in_models": 0.0, "ask": False}
+             "models": [], "view": None, "models_dt": 0.0, "in_models": 0.0, "ask": False,
+             "bell": None, "hooks": 0, "advances": 0}
 
     def between():
         """The engine's coupling hook: the hosted models' step, interface forces out, then serve
@@ -142,18 +148,44 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
             state["F"][:] = backend.forces(state["ids"])
         if state["X_model"] is not None:  # the orchestrator's models read these positions
             backend.read_positions(state["model_ids"], state["X_model"])
-        conn.send(("hook",))
-        while True:
-            msg = conn.recv()
-            if msg[0] == "go":
-                break
-            handle(msg)
+        bell = state["bell"]
+        if bell is None or not conn.root:  # other ranks: rank 0 forwards the go
+            conn.send(("hook",))
+            while True:
+                msg = conn.recv()
+                if msg[0] == "go":
+                    break
+                handle(msg)
+        else:  # ring, then wait for the go, serving the queries the hook makes meanwhile
+            state["hooks"] += 1
+            bell.ring(HOOK, state["hooks"])
+            wait = Backoff()
+            while not bell.rung(GO, state["hooks"]):
+                if wait.now(conn.poll):
+                    handle(conn.recv())
+                    wait.reset()
+                else:
+                    wait()
+            if conn.comm is not None:
+                conn._to_ranks(("go",))  # noqa: SLF001
         if state["F_model"] is not None:  # ... and wrote their forces here
             backend.add_forces(state["model_ids"], state["F_model"])
             state["F_model"][:] = 0.0
         if len(state["ids"]):  # rank 0 reads the shared block, every rank sets the same values
             V = conn.share(state["V"])  # (other ranks: None here, rank 0's values returned)
             backend.set_velocities(state["ids"], V)
+
+    def run(op: str, steps: int, ask: bool, dt: float) -> tuple[float, float]:
+        """Start the engine, or advance it ``steps`` steps; (the engine's own seconds, the
+        hosted models'): the orchestrator separates both from the transport."""
+        state["ask"] = bool(ask)  # the orchestrator has a hook to run
+        hook = between if ask or state["models"] else None
+        t0, state["in_hook"], state["in_models"] = time.perf_counter(), 0.0, 0.0
+        # the models' step: none behind the first hook (at start), the engine's after it
+        state["models_dt"] = dt if op == "advance" else 0.0
+        for _ in range(steps if op == "advance" else 1):
+            getattr(backend, op)(hook)
+        return time.perf_counter() - t0 - state["in_hook"], state["in_models"]
 
     def handle(msg) -> bool:
         """Run one control message; False when the worker should stop."""
@@ -190,24 +222,21 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
                 backend.add_forces(state["model_ids"], state["F_model"])
                 state["F_model"][:] = 0.0
                 conn.send(("ok",))
+            elif op == "doorbell":  # the per-step handshake in shared memory from now on (rank 0)
+                if conn.root:
+                    state["bell"] = Doorbell(args[0])
+                conn.send(("ok",))
             elif op == "set_dt":
                 backend.set_dt(args[0])
                 conn.send(("ok",))
             elif op in ("start", "advance"):
-                state["ask"] = bool(args[1])  # the orchestrator has a hook to run
-                hook = between if args[1] or state["models"] else None
-                t0, state["in_hook"], state["in_models"] = time.perf_counter(), 0.0, 0.0
-                # the models' step: none behind the first hook (at start), the engine's after it
-                state["models_dt"] = args[2] if op == "advance" else 0.0
-                for _ in range(args[0] if op == "advance" else 1):
-                    getattr(backend, op)(hook)
-                # the engine's own time and the hosted models': the orchestrator separates
-                # them from the transport
-                conn.send(("done", time.perf_counter() - t0 - state["in_hook"], state["in_models"]))
+                conn.send(("done", *run(op, *args)))
             elif op == "call":  # bulk queries: positions, velocities, energies, forces(ids)
                 out = getattr(backend, args[0])(*args[1:])
                 # plain lists: the two processes may run different numpy versions
                 conn.send(("ok", _plain(out)))
+            elif op == "raise":  # an advance rung on the doorbell failed: report it as its own
+                raise args[0]
             elif op == "finalize":
                 backend.finalize()
                 conn.send(("ok",))
@@ -225,14 +254,36 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
                 conn.send(("error", f"{type(exc).__name__}: {exc} ({Path(where.filename).name}:{where.lineno})"))
         return True
 
+    def serve_one() -> bool:
+        """The next advance rung on the doorbell (one rank) or message; False to stop."""
+        bell, wait = state["bell"], Backoff()
+        while bell is not None and conn.comm is None:
+            if bell.rung(ADVANCE, state["advances"] + 1):
+                state["advances"] += 1
+                v = bell.value
+                try:
+                    engine_s, models_s = run("advance", int(v[STEPS]), bool(v[ASK]), float(v[DT]))
+                except (EOFError, ConnectionError):
+                    raise
+                except Exception as exc:  # reported on the socket, as a message's failure
+                    return handle(("raise", exc))
+                bell.ring(DONE, state["advances"], {ENGINE_S: engine_s, MODELS_S: models_s})
+                return True
+            if wait.now(conn.poll):
+                break
+            wait()
+        return handle(conn.recv())
+
     try:
-        while handle(conn.recv()):
+        while serve_one():
             pass
     except (EOFError, ConnectionError):  # the orchestrator is gone: stop, and let the engine shut down cleanly
         conn.tell_stop()
         backend.finalize()
     for b in state["blocks"]:
         b.close()
+    if state["bell"] is not None:
+        state["bell"].close()
 
 
 def main() -> None:

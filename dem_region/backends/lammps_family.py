@@ -271,13 +271,21 @@ class VerletArrays:
         self._cmd("fix hold iface setforce 0 0 0")
 
     def set_velocities(self, ids: np.ndarray, v: np.ndarray) -> None:
-        ids, v = np.asarray(ids, int), np.asarray(v, float).reshape(-1, 3)
+        v = np.asarray(v, float).reshape(-1, 3)
         if not self._n_partial:
-            self.V[ids] = v
+            self.V[np.asarray(ids, int)] = v
             return
-        driven = self._driven[ids]
-        written = driven | ~driven.any(axis=1, keepdims=True)  # partial particles: the driven components only
-        self.V[ids] = np.where(written, v, self.V[ids])
+        # partial particles: the driven components only; the plan once per ids array (the
+        # interface's, each step) and prescription
+        key = (ids, self._n_partial)
+        if getattr(self, "_vel_key", None) is None or any(a is not b for a, b in zip(key, self._vel_key)):
+            rows = np.asarray(ids, int)
+            driven = self._driven[rows]
+            written = driven | ~driven.any(axis=1, keepdims=True)
+            at = np.nonzero(written)
+            self._vel_key, self._vel_plan = key, (rows[at[0]], at[1], written)
+        rows, comps, written = self._vel_plan
+        self.V[rows, comps] = v[written]
 
     bulk_arrays = True  # positions read and forces written on the engine's arrays (ModelStep)
 

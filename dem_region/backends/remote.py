@@ -1,4 +1,5 @@
-"""A DEM back-end that runs in a worker process (shared memory for arrays, a socket for control).
+"""A DEM back-end that runs in a worker process (shared memory for arrays and the per-step
+handshake, dem_region/doorbell.py; a socket for control).
 
 Same contract as the in-process adapters, so the orchestrator cannot tell the difference and
 the same case gives the same numbers either way. Needed by LAMMPS, whose MPICH cannot share
@@ -22,6 +23,7 @@ from typing import Callable
 import numpy as np
 
 from .. import wire
+from ..doorbell import ADVANCE, ASK, DONE, DT, ENGINE_S, GO, HOOK, MODELS_S, STEPS, Backoff, Doorbell
 from ..model_step import set_model_states
 from ..scene import DemScene
 from .base import EngineUnavailable
@@ -56,6 +58,8 @@ class RemoteBackend:
         else:
             parent = self._launch_ranks(python, engine, env)
         self.conn = Connection(parent.detach())
+        self.bell: Doorbell | None = None  # the per-step handshake, made at the first start
+        self._hooks = self._advances = 0  # hooks the worker rang, advances rung to it, so far
         self.blocks: list[shared_memory.SharedMemory] = []
         self.ids = np.zeros(0, int)
         self.prescribed = self.ids
@@ -176,31 +180,55 @@ class RemoteBackend:
 
     def _run(self, op: str, between: Callable[[], None] | None, n: int = 1) -> None:
         clock = time.perf_counter
+        if self.bell is None:
+            self.bell = Doorbell()
+            self._call("doorbell", self.bell.name)
+        bell, wait = self.bell, Backoff()
         t0, in_hook = clock(), 0.0
-        self._send((op, n, between is not None, self._dt))
+        rung = op == "advance" and self.ranks == 1  # (several ranks: rank 0 forwards the message)
+        if rung:
+            self._advances += 1
+            bell.ring(ADVANCE, self._advances, {STEPS: n, ASK: float(between is not None), DT: self._dt})
+        else:
+            self._send((op, n, between is not None, self._dt))
         while True:
-            msg = self._recv()
-            if msg[0] == "hook":
-                self._evaluations += 1
-                self._added_here = None  # the worker's F was taken before this hook's additions
-                self._models_pending = False
-                if between is not None:
-                    t1 = clock()
-                    between()
-                    in_hook += clock() - t1
-                self._send(("go",))
-            elif msg[0] == "done":
-                if between is None:  # the worker's hosted models stepped without telling
-                    self._evaluations += n
-                # waiting minus the worker's engine time: messages, shared-memory copies, the
-                # worker's side of the hook protocol (what an in-process engine does not pay)
-                if len(msg) > 1:
-                    models = float(msg[2]) if len(msg) > 2 else 0.0
-                    self.models_s += models
-                    self.transport_s += max(0.0, clock() - t0 - in_hook - float(msg[1]) - models)
+            if bell.rung(HOOK, self._hooks + 1):
+                self._hooks += 1
+                in_hook += self._hook(between)
+                bell.ring(GO, self._hooks)
+                wait.reset()
+                continue
+            if rung and bell.rung(DONE, self._advances):
+                self._done(between, n, clock() - t0 - in_hook, bell.value[ENGINE_S], bell.value[MODELS_S])
                 return
-            else:
-                raise RuntimeError(f"{self.name} worker: {msg}")
+            if not wait.now(self.conn.poll):
+                wait()
+                continue
+            msg = self._recv()
+            if msg[0] == "done":
+                self._done(between, n, clock() - t0 - in_hook, *msg[1:3])
+                return
+            raise RuntimeError(f"{self.name} worker: {msg}")
+
+    def _done(self, between, n: int, waited: float, engine_s: float, models_s: float) -> None:
+        """Book an advance's end: ``waited`` s outside the hooks, of which the worker spent
+        ``engine_s`` in the engine and ``models_s`` in the hosted models; the rest is transport
+        (messages, shared-memory copies, the worker's side of the handshake: what an in-process
+        engine does not pay)."""
+        if between is None:  # the worker's hosted models stepped without telling
+            self._evaluations += n
+        self.models_s += float(models_s)
+        self.transport_s += max(0.0, waited - float(engine_s) - float(models_s))
+
+    def _hook(self, between: Callable[[], None] | None) -> float:
+        """The orchestrator's side of one engine step's hook; its wall time (s)."""
+        t1 = time.perf_counter()
+        self._evaluations += 1
+        self._added_here = None  # the worker's F was taken before this hook's additions
+        self._models_pending = False
+        if between is not None:
+            between()
+        return time.perf_counter() - t1
 
     def start(self, between: Callable[[], None] | None = None) -> None:
         self._run("start", between)
@@ -320,3 +348,6 @@ class RemoteBackend:
             b.close()
             b.unlink()
         self.blocks = []
+        if self.bell is not None:
+            self.bell.close()
+            self.bell = None
