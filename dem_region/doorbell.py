@@ -2,15 +2,15 @@
 
 Each clock step the orchestrator starts the engine's advance and waits for its end ("advance",
 then "done"); each engine step the worker hands the interface forces over and waits for the
-velocities back ("hook", then "go"). Two pickled socket messages cost about 0.1 ms each way on this
-machine (a wake-up through the kernel each), more than a LAMMPS step of a few thousand
-particles. Here each side owns its counters in a shared block and only ever raises them: the
-worker rings ``hook`` k, the orchestrator answers ``go`` k, and the same for advance / done
-(one rank; on several, rank 0 forwards the advance to the others by MPI, so it keeps the
-socket). A waiter polls the other's
-counter (and the socket, which still carries the queries a hook may make and the end of an
-advance), spinning for a few microseconds, then yielding its core, then sleeping longer and
-longer (up to 1 ms), so a long wait (output, a checkpoint) does not hold a core.
+velocities back ("hook", then "go"). As pickled socket messages these cost about 0.1 ms each
+(a wake-up through the kernel each), more than a LAMMPS step of a few thousand particles.
+Here each side owns its counters in a shared block and only ever raises them: the worker
+rings ``hook`` k, the orchestrator answers ``go`` k, and the same for advance / done (one
+rank; on several, rank 0 forwards each advance to the other ranks by MPI, so it keeps the
+socket). A waiter reads the other's counter, and every 32nd round the socket (which still
+carries the queries a hook may make, errors, and several ranks' advances): it spins a few
+rounds, then yields its core (about a millisecond), then sleeps longer and longer (up to
+1 ms), so a long wait (output, a checkpoint) or a core wanted by another process is given up.
 
 One writer per counter and x86's store order make the counter's new value visible after the
 arrays written before it (the forces, the velocities).
@@ -34,7 +34,7 @@ class Backoff:
     """Wait politely: spin ``spin`` rounds, then yield the core until ``yield_rounds``, then
     sleep, doubling from 10 us to ``longest`` s."""
 
-    def __init__(self, spin: int = 64, yield_rounds: int = 20000, longest: float = 1e-3):
+    def __init__(self, spin: int = 64, yield_rounds: int = 2000, longest: float = 1e-3):
         self.spin, self.yield_rounds, self.longest = spin, yield_rounds, longest
         self.rounds = 0
 
