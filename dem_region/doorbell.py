@@ -9,15 +9,17 @@ rings ``hook`` k, the orchestrator answers ``go`` k, and the same for advance / 
 rank; on several, rank 0 forwards each advance to the other ranks by MPI, so it keeps the
 socket). A waiter reads the other's counter, and every 32nd round the socket (which still
 carries the queries a hook may make, errors, and several ranks' advances): it spins a few
-rounds, then yields its core (about a millisecond), then sleeps longer and longer (up to
-1 ms), so a long wait (output, a checkpoint) or a core wanted by another process is given up.
+rounds, then yields its core (a few milliseconds), then waits in the socket's select 0.2 ms at
+a time, so a long wait (output, a checkpoint) does not hold a core.
 
 One writer per counter and x86's store order make the counter's new value visible after the
-arrays written before it (the forces, the velocities).
+arrays written before it (the forces, the velocities); elsewhere (``available``) the
+handshake stays on the socket.
 """
 from __future__ import annotations
 
 import os
+import platform
 import time
 from multiprocessing import resource_tracker, shared_memory
 
@@ -31,29 +33,37 @@ STEPS, ASK, DT, ENGINE_S, MODELS_S = range(5)
 
 
 class Backoff:
-    """Wait politely: spin ``spin`` rounds, then yield the core until ``yield_rounds``, then
-    sleep, doubling from 10 us to ``longest`` s."""
+    """Wait politely for a counter, watching a socket too: spin ``spin`` rounds, then yield the
+    core until ``yield_rounds`` (a few milliseconds), then wait in the socket's select for
+    ``longest`` s at a time, which a message ends at once. ``poll(timeout)`` (a Connection's)
+    costs about 20 us (it builds a selector), so before that it is asked every 32nd round."""
 
-    def __init__(self, spin: int = 64, yield_rounds: int = 2000, longest: float = 1e-3):
+    def __init__(self, spin: int = 64, yield_rounds: int = 5000, longest: float = 2e-4):
         self.spin, self.yield_rounds, self.longest = spin, yield_rounds, longest
         self.rounds = 0
 
     def reset(self) -> None:
         self.rounds = 0
 
-    def now(self, poll) -> bool:
-        """``poll()`` (is a socket message waiting?) every 32nd round only: a Connection's poll
-        builds a selector each call (about 20 us, more than the handshake it would delay)."""
-        return self.rounds % 32 == 31 and poll()
-
-    def __call__(self) -> None:
+    def __call__(self, poll=None) -> bool:
+        """One round; True when ``poll`` says a socket message is waiting."""
         self.rounds += 1
-        if self.rounds <= self.spin:
-            return
-        if self.rounds <= self.yield_rounds:
+        if self.rounds > self.yield_rounds:
+            if poll is None:
+                time.sleep(self.longest)
+                return False
+            return poll(self.longest)
+        if poll is not None and self.rounds % 32 == 0 and poll(0):
+            return True
+        if self.rounds > self.spin:
             os.sched_yield()
-            return
-        time.sleep(min(self.longest, 1e-5 * 2.0 ** min(self.rounds - self.yield_rounds, 10)))
+        return False
+
+
+def available() -> bool:
+    """x86's store order makes a counter visible after the arrays written before it; on other
+    machines (no fence here) the handshake stays on the socket."""
+    return platform.machine().lower() in ("x86_64", "amd64")
 
 
 class Doorbell:

@@ -91,9 +91,9 @@ class _Ranks:
         if self.root:
             self.conn.send(msg)
 
-    def poll(self) -> bool:
-        """A message from the orchestrator is waiting (rank 0)."""
-        return self.conn.poll(0)
+    def poll(self, timeout: float = 0.0) -> bool:
+        """A message from the orchestrator is waiting, or comes within ``timeout`` s (rank 0)."""
+        return self.conn.poll(timeout)
 
     def _to_ranks(self, msg) -> None:
         self.told_stop = self.told_stop or _is_eof(msg)
@@ -161,11 +161,9 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
             bell.ring(HOOK, state["hooks"])
             wait = Backoff()
             while not bell.rung(GO, state["hooks"]):
-                if wait.now(conn.poll):
+                if wait(conn.poll):
                     handle(conn.recv())
                     wait.reset()
-                else:
-                    wait()
             if conn.comm is not None:
                 conn._to_ranks(("go",))  # noqa: SLF001
         if state["F_model"] is not None:  # ... and wrote their forces here
@@ -269,9 +267,8 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
                     return handle(("raise", exc))
                 bell.ring(DONE, state["advances"], {ENGINE_S: engine_s, MODELS_S: models_s})
                 return True
-            if wait.now(conn.poll):
+            if wait(conn.poll):
                 break
-            wait()
         return handle(conn.recv())
 
     try:

@@ -57,14 +57,72 @@ def test_the_handshake_crosses_processes_in_order_and_leaves_no_block():
         shared_memory.SharedMemory(name=name)
 
 
-def test_a_long_wait_sleeps_instead_of_holding_a_core():
-    """Past its spin and yield rounds the backoff sleeps, longer and longer up to its bound."""
+def test_a_long_wait_sleeps_instead_of_holding_a_core_and_a_message_ends_it():
+    """Past its spin and yield rounds the backoff waits ``longest`` per round without using the
+    core (process time far below wall time); waiting in a socket's select, it returns as soon
+    as a message arrives."""
     import time
+    from multiprocessing import Pipe
     wait = Backoff(spin=2, yield_rounds=4, longest=2e-3)
     for _ in range(4):
         wait()
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     for _ in range(20):
         wait()
-    slept = time.perf_counter() - t0
-    assert slept > 10 * 1e-3  # most of the 20 rounds at the 2 ms bound
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+    assert 20 * 2e-3 <= wall < 20 * 2e-3 + 0.5 and cpu < 0.5 * wall
+    a, b = Pipe()
+    wait = Backoff(spin=0, yield_rounds=0, longest=5.0)
+    b.send("query")
+    t0 = time.perf_counter()
+    assert wait(a.poll) and time.perf_counter() - t0 < 1.0
+
+
+def test_an_advance_that_fails_in_the_worker_is_reported_where_it_failed_and_the_next_one_runs(monkeypatch):
+    """The worker's serve() against the orchestrator's RemoteBackend._run over a socket pair and
+    the doorbell, with a made-up engine whose second step raises: the orchestrator raises the
+    engine's message naming the line that failed, and the counters stay in step (the third
+    advance runs)."""
+    import socket
+    import threading
+    from multiprocessing.connection import Connection
+
+    from dem_region import backends, worker
+    from dem_region.backends.remote import RemoteBackend
+
+    class Engine:
+        steps = 0
+
+        def start(self, hook):
+            pass
+
+        def advance(self, hook):
+            Engine.steps += 1
+            if Engine.steps == 2:
+                raise ValueError("a bond stretched past its length")
+
+        def finalize(self):
+            pass
+
+    monkeypatch.setattr(backends, "get_backend", lambda name: Engine)
+    ours, theirs = socket.socketpair()
+    serving = threading.Thread(target=worker.serve, args=(Connection(theirs.detach()), "made-up"), daemon=True)
+    serving.start()
+    remote = object.__new__(RemoteBackend)  # its state without a child process
+    remote.name, remote.ranks, remote.conn, remote.bell, remote.proc = "made-up", 1, Connection(ours.detach()), None, None
+    remote._hooks = remote._advances = remote._evaluations = 0
+    remote._dt, remote._models_pending, remote.models_s, remote.transport_s = 1e-6, False, 0.0, 0.0
+    try:
+        remote.start(None)
+        remote.advance(None)
+        with pytest.raises(RuntimeError, match=r"ValueError: a bond stretched past its length \(test_doorbell.py:\d+\)"):
+            remote.advance(None)
+        remote.advance(None)
+        assert Engine.steps == 3 and remote._advances == 3
+        remote._call("finalize")
+        serving.join(timeout=10)
+        assert not serving.is_alive()
+    finally:
+        remote.conn.close()
+        if remote.bell is not None:
+            remote.bell.close()

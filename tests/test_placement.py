@@ -71,6 +71,10 @@ def test_a_flagged_region_apart_from_the_impact_is_left_to_the_far_field_with_a_
 def test_a_zone_the_box_cannot_hold_is_refused_with_what_would_fit():
     with pytest.raises(CaseError, match=r"zone.placement = 'auto'.*out to x = 21 mm.*allowed at most 0.8 x half"):
         decide(_estimate([0.9] * 21 + [0.1] * 4), 0.3e-3, 25e-3, 0.5, 1.2e-3)
+    # nothing flagged, no criterion (elastic plies, cohesive far field): the margin is to blame
+    nothing = Estimate(np.arange(25) * 1e-3, np.arange(1, 26) * 1e-3, {}, 1e-3, 0.0)
+    with pytest.raises(CaseError, match=r"contact patch \(1 mm\) and the margin \(20 mm\)"):
+        decide(nothing, 0.3e-3, 25e-3, 0.5, 20e-3)
 
 
 def test_a_tied_far_field_that_delaminates_everywhere_is_refused_before_anything_is_written(femdem, tmp_path):
@@ -127,6 +131,7 @@ def _assert_placed_zone_gives_all_dem(coupled, dem, H=2.4e-3):
 @settings(max_examples=1, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.generate],
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(**BEAM)
+@example(span=25e-3, radius=5e-3, velocity=10.0, mass=0.617)  # the seed's impact: an interface debonds
 def test_a_placed_zone_gives_the_all_dem_beam_over_its_ranges(femdem, span, radius, velocity, mass):
     """The coarse seed beam anywhere in its documented ranges, coupled with the zone placed from
     its all-FEM estimate: peak deflection within 6 % and the contact's impulse within 5 % of the

@@ -17,7 +17,7 @@ from .assemble import beam, plate
 from .bonded import bonded_beam
 from .disc import disc
 from .panel import panel as assemble_panel
-from .placement import place
+from .placement import estimate, place
 from .schema import BONDED, LAMINATED, MODES, document, parameters
 
 __all__ = ["Study", "document_schema", "renamed"]
@@ -197,10 +197,11 @@ class Study:
         per parameter set; None otherwise."""
         if mode != "coupled" or p.get("zone.placement", "box") != "auto":
             return None
-        key = _physics_key(p)
+        # the estimate (an all-FEM run) once per physics, whatever the placement's own keys
+        key = tuple(kv for kv in _physics_key(p) if kv[0] not in PLACEMENT_KEYS)
         if key not in self._placed:
-            self._placed[key] = place(self, p)
-        return self._placed[key]
+            self._placed[key] = estimate(self, p)
+        return place(self, p, self._placed[key])
 
     def build(self, p: dict, mode: str, dem: str):
         assemble = {"plate": plate, "disc": disc, "bonded_beam": bonded_beam, "bonded_beam_3d": bonded_beam,
@@ -246,6 +247,9 @@ class Study:
             return
         plots.histories(self, p, history, qoi, plots_dir)
         plots.damage(history, plots_dir)
+
+
+PLACEMENT_KEYS = ("zone.placement", "zone.grow_at", "zone.margin", "zone.half_width")
 
 
 def _physics_key(p: dict) -> tuple:

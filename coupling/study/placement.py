@@ -75,6 +75,9 @@ def estimate(study, p: dict) -> tuple[Estimate, float, float, float]:
     from ..simulation import Instability, run_clock
     from .assemble import beam
 
+    if p.get("mesh.file"):  # the placed edge would have to be a line of the file's mesh
+        raise CaseError("zone.placement = 'auto': not with a mesh file (mesh.file), whose line at the zone's edge "
+                        "fixes the zone; allowed: zone.placement = 'box'")
     q = dict(p, **{"clock.dt": 0.0, "output.field_frames": 0})
     t0 = time.perf_counter()
     sim, built = beam(study, q, "fem", "")
@@ -125,12 +128,17 @@ def decide(est: Estimate, d: float, L: float, grow_at: float, margin: float, pun
     reach = grown_reach(est.x0[flagged], est.x1[flagged], start, margin)
     w = max(np.ceil((reach + margin) / d - 1e-9), np.ceil((punch + 2 * d) / d - 1e-9), 3) * d
     if not w < 0.8 * L:
+        allowed = f"allowed at most 0.8 x half the span ({0.8 * L * 1e3:.3g} mm)"
+        if reach <= start or not criteria:  # the patch (or punch) and the margin alone
+            raise CaseError(f"zone.placement = 'auto': the contact patch ({start * 1e3:.3g} mm) and the margin "
+                            f"({margin * 1e3:.3g} mm) make the zone {w * 1e3:.3g} mm; {allowed}: a smaller "
+                            "zone.margin, or --mode dem")
         near = flagged & (est.x0 <= reach)
         which = max(criteria, key=lambda c: est.peaks[c][near].max(initial=0.0))
         raise CaseError(
             f"zone.placement = 'auto': the all-FEM estimate puts the {which} index at {grow_at:g} or more from the "
-            f"impact out to x = {reach * 1e3:.3g} mm, so the zone would be {w * 1e3:.3g} mm; allowed at most 0.8 x half "
-            f"the span ({0.8 * L * 1e3:.3g} mm): raise zone.grow_at, or run --mode dem"
+            f"impact out to x = {reach * 1e3:.3g} mm, so the zone would be {w * 1e3:.3g} mm; {allowed}: raise "
+            "zone.grow_at, or run --mode dem"
             + (f", or let the far field delaminate ({far_field})" if far_field and which == "interlaminar" else ""))
     out = flagged & (est.x1 > w + 1e-9 * L)
     warnings = []
@@ -144,9 +152,10 @@ def decide(est: Estimate, d: float, L: float, grow_at: float, margin: float, pun
     return Placement(float(w), float(est.contact), float(reach), float(index.max(initial=0.0)), est.wall, warnings)
 
 
-def place(study, p: dict) -> Placement:
-    """The zone of the coupled run of ``p`` (a beam or beam_3d study) from its all-FEM estimate."""
-    est, d, L, H = estimate(study, p)
+def place(study, p: dict, estimated: tuple) -> Placement:
+    """The zone of the coupled run of ``p`` (a beam or beam_3d study) from its all-FEM estimate
+    ``estimated`` (what ``estimate`` returns)."""
+    est, d, L, H = estimated
     # a contact's own stress field decays over about the laminate's thickness (Saint-Venant):
     # the tie stays outside it (a 4-particle margin let the coupled beam crack plies at its edge)
     margin = p["zone.margin"] or max(4 * d, H)

@@ -130,21 +130,23 @@ def _zone_edge_series(built, name, f):
 
 def _far_field_series(built, name, f):
     """The largest failure indices over the FEM's elements now (1 at initiation): Hoffman's
-    ply index and Hashin's interlaminar index from each element's centroid strain and ply
-    (study/fields.FemIndices); the FEM cannot fail, so a peak at 1 or more is damage the
-    model leaves out. No series without a FEM or a laminate."""
+    ply index and, where the far-field plies are tied (a cohesive far field delaminates by
+    itself), Hashin's interlaminar index, from each element's centroid strain and ply
+    (study/fields.FemIndices); a peak at 1 or more is damage the model leaves out. No series
+    without a FEM or a laminate."""
     dyn = built.dyn
     if dyn is None or built.lam is None:
         return {}
     from .fields import FemIndices
-    indices, now = FemIndices(dyn.region, built.lam, built.dim), {}
+    indices = FemIndices(dyn.region, built.lam, built.dim)
 
-    def evaluate(which: int) -> float:
-        if which == 0:  # both indices from one strain evaluation per sample
-            now["hashin"], now["hoffman"] = indices(dyn.region.centroid_strain_stress(dyn.state.u)[0])
-        return float(np.max(now["hoffman" if which == 0 else "hashin"]))
+    def largest(which: int) -> float:
+        return float(np.max(indices(dyn.region.centroid_strain_stress(dyn.state.u)[0])[which]))
 
-    return {f"{name}_hoffman": lambda: evaluate(0), f"{name}_interlaminar": lambda: evaluate(1)}
+    series = {f"{name}_hoffman": lambda: largest(1)}
+    if built.node_bonds is None:
+        series[f"{name}_interlaminar"] = lambda: largest(0)
+    return series
 
 
 def first_time(time: np.ndarray, series: np.ndarray) -> float:
@@ -292,11 +294,12 @@ PROBES: dict[str, ProbeKind] = {
         {"columns": Param(2, "particle columns counted from the edge", kind="int", low=0, high=100)},
         _zone_edge_series, _max_qoi),
     "far_field_failure": ProbeKind(
-        "the largest failure indices in the FEM (1 at initiation; the FEM cannot fail, so 1 or more is damage the "
-        "model leaves out); qoi peak_NAME_hoffman, peak_NAME_interlaminar",
+        "the largest failure indices in the FEM (1 at initiation; 1 or more is damage the model leaves out): "
+        "Hoffman's, and Hashin's interlaminar where the far-field plies are tied; qoi peak_NAME_hoffman "
+        "(peak_NAME_interlaminar)",
         {}, _far_field_series,
         _when("{name}_hoffman")(lambda name, f, h: {f"peak_{name}_{c}": float(np.max(h[f"{name}_{c}"]))
-                                                     for c in ("hoffman", "interlaminar")})),
+                                                     for c in ("hoffman", "interlaminar") if f"{name}_{c}" in h})),
     "impactor_motion": ProbeKind(
         "an impactor's velocity into the structure and its face's travel; qoi final_NAME_velocity",
         {"impactor": Param("", "the impactor (an [impactors.*] name)", kind="str")},

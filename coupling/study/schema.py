@@ -279,7 +279,7 @@ SECTIONS: dict[str, dict[str, Param]] = {
                          low=0.05, high=2.0),
         "margin": Param(0.0, "auto placement: the zone's margin beyond the flagged elements, and the widest gap "
                         "between them it bridges; 0: the laminate's thickness (a contact's own stress field decays over "
-                        "about it) or four particle sizes, the larger", unit="m", low=0.0),
+                        "about it) or four particle sizes, the larger", unit="m", low=0.0, high=0.5),
         "plies_per_particle": Param(1, "plies per particle row (the particle size is this x ply thickness; "
                                     "laminates)", kind="int", low=1, high=8),
         "particle_size": Param(0.0, "lattice spacing d (bonded beams: the depth holds a whole number of rows; a "

@@ -23,6 +23,7 @@ from typing import Callable
 import numpy as np
 
 from .. import wire
+from .. import doorbell
 from ..doorbell import ADVANCE, ASK, DONE, DT, ENGINE_S, GO, HOOK, MODELS_S, STEPS, Backoff, Doorbell
 from ..model_step import set_model_states
 from ..scene import DemScene
@@ -120,10 +121,14 @@ class RemoteBackend:
         self._send(msg)
         reply = self._recv()
         if reply[0] == "error":
-            if reply[2:] == ("NotImplementedError",):
-                raise NotImplementedError(reply[1])
-            raise RuntimeError(f"{self.name} worker: {reply[1]}")
+            self._raise(reply)
         return reply
+
+    def _raise(self, reply) -> None:
+        """A worker's error reply as an exception (a refusal as NotImplementedError: bad input)."""
+        if reply[0] == "error" and reply[2:] == ("NotImplementedError",):
+            raise NotImplementedError(reply[1])
+        raise RuntimeError(f"{self.name} worker: {reply[1] if reply[0] == 'error' else reply}")
 
     def build(self, scene: DemScene) -> None:
         self.scene = scene
@@ -180,35 +185,41 @@ class RemoteBackend:
 
     def _run(self, op: str, between: Callable[[], None] | None, n: int = 1) -> None:
         clock = time.perf_counter
-        if self.bell is None:
+        if self.bell is None and doorbell.available():
             self.bell = Doorbell()
             self._call("doorbell", self.bell.name)
         bell, wait = self.bell, Backoff()
         t0, in_hook = clock(), 0.0
-        rung = op == "advance" and self.ranks == 1  # (several ranks: rank 0 forwards the message)
+        rung = bell is not None and op == "advance" and self.ranks == 1  # (ranks: rank 0 forwards it)
         if rung:
             self._advances += 1
             bell.ring(ADVANCE, self._advances, {STEPS: n, ASK: float(between is not None), DT: self._dt})
         else:
             self._send((op, n, between is not None, self._dt))
         while True:
-            if bell.rung(HOOK, self._hooks + 1):
-                self._hooks += 1
-                in_hook += self._hook(between)
-                bell.ring(GO, self._hooks)
-                wait.reset()
-                continue
-            if rung and bell.rung(DONE, self._advances):
-                self._done(between, n, clock() - t0 - in_hook, bell.value[ENGINE_S], bell.value[MODELS_S])
-                return
-            if not wait.now(self.conn.poll):
-                wait()
-                continue
+            if bell is not None:
+                if bell.rung(HOOK, self._hooks + 1):
+                    self._hooks += 1
+                    try:
+                        in_hook += self._hook(between)
+                    finally:  # the worker finishes its step even when the hook failed here
+                        bell.ring(GO, self._hooks)
+                    wait.reset()
+                    continue
+                if rung and bell.rung(DONE, self._advances):
+                    self._done(between, n, clock() - t0 - in_hook, bell.value[ENGINE_S], bell.value[MODELS_S])
+                    return
+                if not wait(self.conn.poll):
+                    continue
             msg = self._recv()
-            if msg[0] == "done":
+            if msg[0] == "hook":  # the socket's handshake (no doorbell on this machine)
+                in_hook += self._hook(between)
+                self._send(("go",))
+            elif msg[0] == "done":
                 self._done(between, n, clock() - t0 - in_hook, *msg[1:3])
                 return
-            raise RuntimeError(f"{self.name} worker: {msg}")
+            else:
+                self._raise(msg)
 
     def _done(self, between, n: int, waited: float, engine_s: float, models_s: float) -> None:
         """Book an advance's end: ``waited`` s outside the hooks, of which the worker spent
