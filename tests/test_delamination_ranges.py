@@ -97,6 +97,7 @@ def test_enf_holds_over_its_ranges(femdem, m, h, L_rel, a_rel, substeps, r):
     assert_checks(s)
 
 
+@pytest.mark.slow  # 39 s (the suite's budget): the SLB's defaults run in test_damage, wider draws below
 @COARSE
 @given(m=MATERIAL, h=THICK, L_rel=st.floats(1.2, 2.0), a_rel=st.floats(0.4, 0.6),
        substeps=st.sampled_from([0, 1, 2]), r=RADIUS)

@@ -128,14 +128,14 @@ def _assert_placed_zone_gives_all_dem(coupled, dem, H=2.4e-3):
         assert debonded[0] == debonded[1], (coupled, dem)
 
 
-@settings(max_examples=1, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.generate],
+# the default suite runs the seed's impact alone (the suite's budget); -m slow samples the ranges
+@settings(max_examples=1, deadline=None, phases=[Phase.explicit],
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(**BEAM)
 @example(span=25e-3, radius=5e-3, velocity=10.0, mass=0.617)  # the seed's impact: an interface debonds
-def test_a_placed_zone_gives_the_all_dem_beam_over_its_ranges(femdem, span, radius, velocity, mass):
-    """The coarse seed beam anywhere in its documented ranges, coupled with the zone placed from
-    its all-FEM estimate: peak deflection within 6 % and the contact's impulse within 5 % of the
-    all-DEM beam's (the hand-drawn 12 mm zone: 4.5 % and 0.4 % at the defaults), no damage the
+def test_a_placed_zone_gives_the_all_dem_beam_at_the_seed_impact(femdem, span, radius, velocity, mass):
+    """The coarse seed beam, coupled with the zone placed from its all-FEM estimate: peak
+    deflection within 6 % and the contact's impulse within 5 % of the all-DEM beam's (the hand-drawn 12 mm zone: 4.5 % and 0.4 % at the defaults), no damage the
     far field cannot carry at the zone's edge, and the interface that debonds is the all-DEM
     one's."""
     _assert_placed_zone_gives_all_dem(*placed_against_all_dem(femdem, "liggghts", span, radius, velocity, mass))
@@ -145,5 +145,6 @@ def test_a_placed_zone_gives_the_all_dem_beam_over_its_ranges(femdem, span, radi
 @settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(**BEAM, dem=st.sampled_from(["yade", "liggghts", "lammps"]))
 @example(span=25e-3, radius=5e-3, velocity=12.0, mass=1.0, dem="liggghts")  # the plies crack: the zone grows
+@example(span=20e-3, radius=3e-3, velocity=2.0, mass=0.3, dem="liggghts")  # the mildest corner
 def test_a_placed_zone_gives_the_all_dem_beam_on_every_engine(femdem, span, radius, velocity, mass, dem):
     _assert_placed_zone_gives_all_dem(*placed_against_all_dem(femdem, dem, span, radius, velocity, mass))
