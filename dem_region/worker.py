@@ -95,6 +95,11 @@ class _Ranks:
         """A message from the orchestrator is waiting, or comes within ``timeout`` s (rank 0)."""
         return self.conn.poll(timeout)
 
+    def forward(self, msg) -> None:
+        """Rank 0: ``msg`` to the other ranks (one the orchestrator gave outside the socket)."""
+        if self.comm is not None and self.root:
+            self._to_ranks(msg)
+
     def _to_ranks(self, msg) -> None:
         self.told_stop = self.told_stop or _is_eof(msg)
         for rank in range(1, self.comm.Get_size()):
@@ -164,8 +169,7 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
                 if wait(conn.poll):
                     handle(conn.recv())
                     wait.reset()
-            if conn.comm is not None:
-                conn._to_ranks(("go",))  # noqa: SLF001
+            conn.forward(("go",))
         if state["F_model"] is not None:  # ... and wrote their forces here
             backend.add_forces(state["model_ids"], state["F_model"])
             state["F_model"][:] = 0.0

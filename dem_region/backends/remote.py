@@ -23,8 +23,7 @@ from typing import Callable
 import numpy as np
 
 from .. import wire
-from .. import doorbell
-from ..doorbell import ADVANCE, ASK, DONE, DT, ENGINE_S, GO, HOOK, MODELS_S, STEPS, Backoff, Doorbell
+from ..doorbell import ADVANCE, ASK, DONE, DT, ENGINE_S, GO, HOOK, MODELS_S, STEPS, Backoff, Doorbell, available
 from ..model_step import set_model_states
 from ..scene import DemScene
 from .base import EngineUnavailable
@@ -185,7 +184,7 @@ class RemoteBackend:
 
     def _run(self, op: str, between: Callable[[], None] | None, n: int = 1) -> None:
         clock = time.perf_counter
-        if self.bell is None and doorbell.available():
+        if self.bell is None and available():
             self.bell = Doorbell()
             self._call("doorbell", self.bell.name)
         bell, wait = self.bell, Backoff()
