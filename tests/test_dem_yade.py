@@ -68,6 +68,7 @@ def test_bond_strength(femdem, tmp_path, monkeypatch):
     assert_checks(s)
 
 
+@pytest.mark.slow  # suite budget: YADE's law path runs in tests/test_study.py's coupled-yade runs
 def test_bonded_beam_bending(femdem, tmp_path, monkeypatch):
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
     code, s, _ = femdem("run", "bonded_beam_bending", "--dem", "yade")
@@ -145,6 +146,7 @@ def test_virtual_shear_of_an_isotropic_lattice(tmp_path, monkeypatch):
     assert G == pytest.approx(p["material.E"] / (2 * (1 + unit.nu)), rel=0.05)
 
 
+@pytest.mark.slow  # suite budget: the ply lattices take their moduli in closed form (ply_lattice)
 def test_orthotropic_ply_calibration(tmp_path, monkeypatch):
     """A ply layer calibrated to E11 / E22 of the seed paper's graphite/epoxy (Table 1)."""
     from dem_region import calibration

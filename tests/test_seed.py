@@ -5,7 +5,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, Phase, given, settings
+from hypothesis import HealthCheck, Phase, example, given, settings
 from hypothesis import strategies as st
 
 # the engine for the modes that run one (--dem with --mode fem is refused: it changes nothing)
@@ -168,6 +168,7 @@ def test_cfrp_beam_impact_coarse(femdem):
     assert q["cracked_bonds"] > 0 and q["sheet_broken_bonds"] == 0  # T0 = 2.2 GPa is far off
 
 
+@pytest.mark.slow  # suite budget: the 3D coupled beam runs in test_beam_impact_3d_coarse
 def test_cfrp_beam_impact_3d_coarse(femdem):
     """Seed 5.4 in 3D, coarse (a quarter of the beam, concrete and sheet lattices, Hex8
     around them): the ledger closes, cracking starts when the no-fracture Hex8 beam's bottom
@@ -308,6 +309,7 @@ def test_rod_impact_coupled_holds_its_closed_form_over_its_ranges(femdem, dem, *
 @settings(max_examples=20, deadline=None)
 @given(radius=st.floats(*ROD_RANGES["impactors.rod.radius"]), span=st.floats(*ROD_RANGES["geometry.span"]),
        along=st.sampled_from([4, 6, 8, 12, 16]))
+@example(radius=0.019999999813087792, span=0.2623291015625007, along=4)  # 3.3e-3 off by plain midpoint sums
 def test_the_rod_presses_with_its_whole_face_on_any_mesh(radius, span, along):
     """The rod's footprint on the coarse disc: the nodes' shares sum to the quarter face's area
     pi r^2 / 4 whatever the mesh (to the midpoint sums' resolution of the edge), no share
@@ -323,7 +325,7 @@ def test_the_rod_presses_with_its_whole_face_on_any_mesh(radius, span, along):
     region, _, key = _region(p, lam, core=False)
     share = rod_footprint(region, key, along, lam.thickness, radius)
     h = 0.5 * span / along
-    assert share.sum() == pytest.approx(np.pi * radius**2 / 4, rel=3e-3)
+    assert share.sum() == pytest.approx(np.pi * radius**2 / 4, rel=1e-3)
     whole = rod_footprint(region, key, along, lam.thickness, 10 * span)  # a face over the whole plate
     assert whole.sum() == pytest.approx(tributary_area(p, core=False).sum(), rel=1e-9)
     assert np.all(share <= whole * (1 + 1e-3))  # the midpoint sums of a covered quad, to 1 / (4 n_sub^2)
@@ -470,7 +472,7 @@ def test_a_cohesive_far_field_holds_the_laminate_together_until_it_fails(femdem,
     assert abs(peaks[1] / peaks[0] - 1) < 0.01, peaks
 
 
-@pytest.mark.parametrize("case", ["beam_impact_coarse", "beam_impact_3d_coarse"])
+@pytest.mark.parametrize("case", ["beam_impact_coarse", pytest.param("beam_impact_3d_coarse", marks=pytest.mark.slow)])
 def test_a_cohesive_far_field_dissipates_what_its_debonded_area_costs(femdem, case):
     """Seed 5.1 all-FEM with cohesive ply interfaces, frictionless: the interfaces debond, and the
     energy they dissipate lies between GIc x the debonded area and GIIc x the damaged area

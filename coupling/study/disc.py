@@ -142,7 +142,10 @@ def rod_footprint(region: FemRegion, key: np.ndarray, n: int, H: float, r: float
     x = np.einsum("sa,qai->qsi", N, X)
     a, b = np.einsum("sa,qai->qsi", dN_dxi, X), np.einsum("sa,qai->qsi", dN_deta, X)
     dA = np.abs(a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]) / n_sub**2  # (quads, s)
-    inside = np.hypot(x[..., 0], x[..., 1]) <= r
+    # each cell's covered fraction, linear in the edge's distance across the cell (exact for a
+    # straight edge along the cell's side): the plain midpoint indicator's edge error is one
+    # cell's order in area (the Gauss circle problem), 3e-3 of the face at r / 40
+    inside = np.clip(0.5 + (r - np.hypot(x[..., 0], x[..., 1])) / np.sqrt(dA), 0.0, 1.0)
     share = np.einsum("qs,sa->qa", dA * inside, N)
     by_key = np.bincount(corners.ravel(), share.ravel(), minlength=(n + 1) ** 2)
     out = np.zeros(region.n_nodes)
