@@ -106,8 +106,8 @@ class RunOutput:
     def keep_frames_until(self, t_end: float) -> None:
         """Resuming: drop the stopped attempt's frames after t_end (s), the checkpoint's time;
         the run writes them again (and the XDMF of an attempt that ended with an error)."""
-        for name in ("fields.xdmf", "fields.h5"):
-            (self.dir / name).unlink(missing_ok=True)
+        for name in [*self.dir.glob("fields*.xdmf"), *self.dir.glob("fields*.h5")]:
+            name.unlink(missing_ok=True)
         for f in sorted((self.dir / FRAMES).glob("frame-*.h5")):
             with h5py.File(f, "r") as h5:
                 late = float(h5.attrs["time"]) > t_end * (1 + 1e-12)
@@ -120,13 +120,11 @@ class RunOutput:
         keeps every frame written before it (the XDMF is assembled by ``finish``)."""
         d = self.dir / FRAMES
         d.mkdir(exist_ok=True)
-        if not (d / "mesh.h5").exists():
-            _write_atomic(d / "mesh.h5", lambda h5: (h5.create_dataset("points", data=f.points),
-                                                     [h5.create_dataset(f"cells/{n:03d}:{k}", data=v)
-                                                      for n, (k, v) in enumerate(f.cells.items())]))
+        mesh = self._mesh_of(d, f)
 
         def fill(h5):
             h5.attrs["time"] = t
+            h5.attrs["mesh"] = mesh
             for k, v in f.point_data.items():
                 h5.create_dataset(f"point_data/{k}", data=v)
             for k, blocks in (f.cell_data or {}).items():
@@ -135,24 +133,48 @@ class RunOutput:
         _write_atomic(d / f"frame-{self._frames:06d}.h5", fill)
         self._frames += 1
 
+    @staticmethod
+    def _mesh_of(d: Path, f: FieldFrame) -> str:
+        """The mesh file of frame ``f`` in the frames' directory ``d``: the last one if the
+        frame's points and cells have its shapes, else a new one (a zone that grew: fields.xdmf
+        then holds the frames up to the first growth, fields-1.xdmf the next zone's, ...)."""
+        meshes = sorted(d.glob("mesh*.h5"))
+        sig = lambda points, cells: (points.shape, [(k, v.shape) for k, v in cells.items()])
+        if meshes:
+            with h5py.File(meshes[-1], "r") as h5:
+                cells = {k.split(":")[-1]: h5["cells"][k] for k in sorted(h5["cells"])}
+                if sig(h5["points"], cells) == sig(f.points, f.cells):
+                    return meshes[-1].name
+        name = f"mesh-{len(meshes):03d}.h5"
+        _write_atomic(d / name, lambda h5: (h5.create_dataset("points", data=f.points),
+                                            [h5.create_dataset(f"cells/{n:03d}:{k}", data=v)
+                                             for n, (k, v) in enumerate(f.cells.items())]))
+        return name
+
     def _write_xdmf(self, keep_frames: bool) -> None:
-        """fields.xdmf + fields.h5 (ParaView) from the stored frames, in time order; the
-        frames stay with a run that may be resumed."""
+        """fields.xdmf + fields.h5 (ParaView) from the stored frames, in time order, one pair
+        per mesh (fields-1.xdmf, ... after a zone grew); the frames stay with a run that may
+        be resumed."""
         d = self.dir / FRAMES
         files = sorted(d.glob("frame-*.h5"))
         if not files:
             return
-        with h5py.File(d / "mesh.h5", "r") as h5:
-            # blocks in the frame's order (HDF5 lists keys sorted: the index prefix keeps the order
-            # the cell data follows)
-            points, cells = h5["points"][:], {k.split(":")[-1]: h5["cells"][k][:] for k in sorted(h5["cells"])}
-        with _cwd(self.dir), meshio.xdmf.TimeSeriesWriter("fields.xdmf") as w:
-            w.write_points_cells(points, cells)
-            for f in files:
-                with h5py.File(f, "r") as h5:
-                    pd = {k: v[:] for k, v in h5.get("point_data", {}).items()}
-                    cd = {k: [g[n][:] for n in sorted(g)] for k, g in h5.get("cell_data", {}).items()}
-                    w.write_data(float(h5.attrs["time"]), point_data=pd, cell_data=cd or None)
+        groups: dict[str, list] = {}
+        for f in files:
+            with h5py.File(f, "r") as h5:
+                groups.setdefault(str(h5.attrs["mesh"]), []).append(f)
+        for k, mesh in enumerate(groups):  # in the order the frames use them
+            with h5py.File(d / mesh, "r") as h5:
+                # blocks in the frame's order (HDF5 lists keys sorted: the index prefix keeps the
+                # order the cell data follows)
+                points, cells = h5["points"][:], {k.split(":")[-1]: h5["cells"][k][:] for k in sorted(h5["cells"])}
+            with _cwd(self.dir), meshio.xdmf.TimeSeriesWriter(f"fields{f'-{k}' if k else ''}.xdmf") as w:
+                w.write_points_cells(points, cells)
+                for f in groups[mesh]:
+                    with h5py.File(f, "r") as h5:
+                        pd = {k: v[:] for k, v in h5.get("point_data", {}).items()}
+                        cd = {k: [g[n][:] for n in sorted(g)] for k, g in h5.get("cell_data", {}).items()}
+                        w.write_data(float(h5.attrs["time"]), point_data=pd, cell_data=cd or None)
         if not keep_frames:
             shutil.rmtree(d)
 

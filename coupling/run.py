@@ -63,6 +63,7 @@ def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool,
         finally:
             if bar:
                 bar.close()
+        sim = result.pop("simulation", sim)  # a grown zone's model, if the zone grew
         if status == "ok":
             qoi, checks = scene.evaluate(case.parameters, result["history"], mode)
             t0 = time.perf_counter()

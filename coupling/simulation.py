@@ -111,6 +111,10 @@ class Simulation:
     # what the scene could model only with a compromise, or not as well as its checks assume:
     # one line each, printed before the run and kept in summary.json
     warnings: list[str] = field(default_factory=list)
+    # a zone that grows during the run (coupling/study/growth.py): called after each sample,
+    # returns the Simulation the run continues with (its state carried over) or None; its
+    # state() goes into checkpoints, and rebuild(state) makes the Simulation a resume restores
+    growth: object = None
 
 
 def energy_scale(e: dict[str, float]) -> float:
@@ -138,6 +142,7 @@ def run_clock(sim: Simulation, on_sample: Callable[[int, float], None] | None = 
     from . import checkpoint as ck
 
     timing = dict.fromkeys(TIMERS, 0.0)
+    retired: list[dict] = []  # the stage rows of the models a growing zone replaced
     names = ["time", *sim.probes, "kinetic", "internal", "external_work", "dissipated", "balance_error_rel"]
     hist: dict[str, list[float]] = {k: [] for k in names}
     taken: dict[str, np.ndarray] = {}
@@ -147,6 +152,8 @@ def run_clock(sim: Simulation, on_sample: Callable[[int, float], None] | None = 
     first = 1
     if resume_from is not None:
         saved = ck.read(resume_from)
+        if sim.growth is not None and "growth" in saved["loop"]:  # the zone as it had grown by then
+            sim = sim.growth.rebuild(saved["loop"]["growth"], sim)
         sim.restore(saved["simulation"], Path(resume_from))  # the engine's files are in the same directory
         loop = saved["loop"]
         hist = {k: list(np.asarray(loop["history"][k]).tolist()) for k in names}
@@ -205,7 +212,7 @@ def run_clock(sim: Simulation, on_sample: Callable[[int, float], None] | None = 
         t0 = clock()
         state, engine_save = sim.checkpoint()
         loop = {"step": step, "e0": e0, "scale": scale[0], "history": {k: np.asarray(v) for k, v in hist.items()},
-                "snapshots": dict(taken)}
+                "snapshots": dict(taken), **({"growth": sim.growth.state()} if sim.growth is not None else {})}
         ck.write(run_dir, {"simulation": state, "loop": loop}, engine_save)
         timing["io"] += clock() - t0
 
@@ -220,16 +227,24 @@ def run_clock(sim: Simulation, on_sample: Callable[[int, float], None] | None = 
             run_stages(sim.stages)
             if step % sim.history_every == 0 or step == sim.n_steps:
                 sample(step)
+                if sim.growth is not None and step < sim.n_steps:
+                    t0 = clock()
+                    grown = sim.growth(step)
+                    if grown is not None:  # the run goes on with the grown zone's model
+                        timing.update(_corrected(timing, sim))
+                        retired += stage_timing(sim.stages)
+                        sim = grown
+                    timing["orchestrator"] += clock() - t0
             if frame_every and on_frame and step % frame_every == 0:
                 frame(step)
             if can_save and step % checkpoint_every == 0 and step < sim.n_steps:
                 save(step)
     except Instability as exc:
         sync()
-        exc.partial = _result(hist, _corrected(timing, sim), sim.energies(), step, taken, sim)  # type: ignore[attr-defined]
+        exc.partial = _result(hist, _corrected(timing, sim), sim.energies(), step, taken, sim, retired)  # type: ignore[attr-defined]
         raise
     sync()
-    return _result(hist, _corrected(timing, sim), sim.energies(), sim.n_steps, taken, sim)
+    return _result(hist, _corrected(timing, sim), sim.energies(), sim.n_steps, taken, sim, retired)
 
 
 def _corrected(timing: dict, sim: Simulation) -> dict:
@@ -244,10 +259,16 @@ def _corrected(timing: dict, sim: Simulation) -> dict:
     return timing
 
 
-def _result(hist, timing, energy, steps, snapshots, sim) -> dict:
+def _result(hist, timing, energy, steps, snapshots, sim, retired=()) -> dict:
+    """The run's result; ``simulation``: the one it ended with (a grown zone's: its counts)."""
     history = {k: np.asarray(v) for k, v in hist.items()}
     history.update(snapshots or {})
     err = history["balance_error_rel"]
     energy = dict(energy, balance_error_rel=float(err[-1]) if err.size else 0.0)
-    return {"history": history, "timing_s": timing, "energy": energy, "steps": steps,
-            "stages": stage_timing(sim.stages)}
+    rows = stage_timing(sim.stages)
+    for old in retired:  # the same stages in the models a growing zone replaced
+        row = next((r for r in rows if r["name"] == old["name"] and r.get("within") == old.get("within")), None)
+        if row is not None:
+            row["s"] += old["s"]
+    return {"history": history, "timing_s": timing, "energy": energy, "steps": steps, "stages": rows,
+            "simulation": sim}

@@ -146,6 +146,9 @@ class CoupledClock:
         fem = self.fem
         self.sync_models()
         self.u_snapshot = fem.state.u.copy()  # the FEM drifts ahead of the engine
+        # the FEM's velocity and time before this step's kicks: where a grown zone's model
+        # continues from (coupling/study/growth.py)
+        self.v_start_snapshot, self.t_snapshot = fem.state.v.copy(), fem.state.t
         P = np.zeros(3)
         P[: fem.region.dim] = fem.m @ fem.state.v
         self.momentum_snapshot = P + self._m_dem @ self.dem.velocities() + sum((m.momentum() for m in self.models),

@@ -30,10 +30,15 @@ COUPLING: dict[str, Param] = {
 
 
 def coupled_simulation(p: dict, make_fem: Callable[[np.ndarray | None], ExplicitDynamics], scene: DemScene,
-                       dem: str, t_end_default: float, history_every: int = 0, steps: int = 0, models: tuple = ()):
+                       dem: str, t_end_default: float, history_every: int = 0, steps: int = 0, models: tuple = (),
+                       start: Callable | None = None):
     """(Simulation, CoupledClock) for a FEM far field made by ``make_fem(None)`` and a
     DEM ``scene`` whose group "interface" is slaved to the FEM. steps: FEM steps (default
-    from t_end); history_every: FEM steps between samples (default from output.history_every)."""
+    from t_end); history_every: FEM steps between samples (default from output.history_every);
+    start: a state to continue from (a grown zone's, coupling/study/growth.py), called as
+    start(fem, scene, interface, models) once both participants exist and before the engine
+    is built; it sets the FEM's and the models' state and returns the scene the engine starts
+    from (the particles' current positions and velocities; ``scene`` keeps the reference ones)."""
     fem = make_fem(None)  # built once; the tie's node masses are added below
     try:
         itf = TransitionInterface.build(fem.region, scene.x, scene.groups.get("interface", np.zeros(0, int)))
@@ -45,12 +50,13 @@ def coupled_simulation(p: dict, make_fem: Callable[[np.ndarray | None], Explicit
             # stay: without them an engine adds contact between overlapping law pairs)
             scene = scene.without_bonds_within(itf.ids)
         fem.add_nodal_mass(itf.share_mass(scene.mass[itf.ids]))  # slaved particles move with the nodes
+    engine_scene = start(fem, scene, itf, models) if start is not None else scene
     try:  # the engine last, so a bad interface never leaves an engine or worker behind
         backend = make_backend(dem, p["dem.process"], p["dem.ranks"])
     except EngineUnavailable as exc:
         raise CaseError(str(exc)) from None
     try:
-        return _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, steps, models)
+        return _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, steps, models, engine_scene)
     except NotImplementedError as exc:
         backend.finalize()
         raise CaseError(f"--dem {dem}: {exc}") from None
@@ -59,8 +65,8 @@ def coupled_simulation(p: dict, make_fem: Callable[[np.ndarray | None], Explicit
         raise
 
 
-def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, steps, models):
-    backend.build(scene)
+def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, steps, models, engine_scene):
+    backend.build(engine_scene)
     if p["coupling.tie"] == "kinematic":
         tie = KinematicTie(itf, backend, scene.mass)
     else:

@@ -17,6 +17,7 @@ from .assemble import beam, plate
 from .bonded import bonded_beam
 from .disc import disc
 from .panel import panel as assemble_panel
+from .growth import Growth
 from .placement import estimate, place
 from .schema import BONDED, LAMINATED, MODES, document, parameters
 
@@ -55,6 +56,7 @@ class Study:
         if not isinstance(self.no_fracture_reference, bool):
             raise CaseError(f"case.no_fracture_reference = {self.no_fracture_reference!r}: allowed true or false")
         self._no_fracture, self._placed = {}, {}
+        self.growth = None  # the last coupled run's growing zone (study/growth.py)
         self._shape_tables(shape, data)
         want = {"beam": ("x", "quad4"), "beam_3d": ("xy", "hex8"), "plate": ("xy", "hex8"), "disc": ("xy", "hex8"),
                 "bonded_beam": ("x", "quad4"), "bonded_beam_3d": ("xy", "hex8"), "panel": ("none", "quad4")}[shape]
@@ -143,6 +145,12 @@ class Study:
             refuse.append(("mesh", "elements_width"))
         if shape not in ("beam", "beam_3d"):  # a zone about x = 0 placed from the estimate: beams'
             refuse += [("zone", k) for k in ("placement", "grow_at", "margin")]
+        if shape != "beam":  # a zone grown during the run: the 2D beam's so far
+            for key in ("grow", "grow_to"):
+                if given("zone", key):
+                    raise CaseError(f"zone.{key}: a zone grown during the run is built for geometry.shape = 'beam' "
+                                    f"so far; allowed for {shape!r}: leave it out")
+                refuse.append(("zone", key))
         if shape != "beam":
             if given("mesh", "file"):
                 raise CaseError(f"mesh.file: read for geometry.shape = 'beam' only so far; allowed for {shape!r}: "
@@ -203,13 +211,24 @@ class Study:
             self._placed[key] = estimate(self, p)
         return place(self, p, self._placed[key])
 
-    def build(self, p: dict, mode: str, dem: str):
+    def build(self, p: dict, mode: str, dem: str, start=None):
+        """The Simulation of ``p`` in ``mode`` on engine ``dem``; start: the state a grown zone's
+        coupled model continues from (study/growth.py), None for a run from rest."""
+        sim, built = self.assemble(p, mode, dem, start)
+        self.growth = None
+        if mode == "coupled" and p.get("zone.grow") and start is None:
+            self.growth = Growth(self, p, dem, built, sim)
+        return sim
+
+    def assemble(self, p: dict, mode: str, dem: str, start=None):
+        """(Simulation, Built) of ``p``: the participants, the probes and the fields."""
         assemble = {"plate": plate, "disc": disc, "bonded_beam": bonded_beam, "bonded_beam_3d": bonded_beam,
                     "panel": assemble_panel}
         placed = self.placement(p, mode)
         if placed is not None:
             p = dict(p, **{"zone.half_width": placed.half_width})
-        sim, built = assemble.get(p["geometry.shape"], beam)(self, p, mode, dem)
+        shape = assemble.get(p["geometry.shape"], beam)
+        sim, built = shape(self, p, mode, dem, start) if start is not None else shape(self, p, mode, dem)
         if placed is not None:
             sim.warnings += placed.warnings
         sim.probes.update(probes.series(self, built, p))
@@ -219,7 +238,7 @@ class Study:
             _damage_snapshots(sim, built)
         if p["geometry.shape"] != "panel":  # (a panel keeps its participants' frames: FEM and windows)
             sim.fields = fields.frames(built)  # the whole structure (study/fields.py)
-        return sim
+        return sim, built
 
     def evaluate(self, p: dict, history: dict, mode: str):
         qoi = probes.qoi(self, p, history)
@@ -235,6 +254,9 @@ class Study:
         placed = self.placement(p, mode)
         if placed is not None:
             qoi.update(placed.qoi())
+        if mode == "coupled" and p.get("zone.grow") and getattr(self, "growth", None) is not None:
+            qoi.update(self.growth.qoi())
+            history.update(self.growth.history())  # saved with the history
         if self.reference_elements:
             qoi["model_size_vs_reference"] = qoi["model_size"] / self.reference_elements
         return qoi, closed_forms.evaluate(self, p, qoi, history)
@@ -249,7 +271,7 @@ class Study:
         plots.damage(history, plots_dir)
 
 
-PLACEMENT_KEYS = ("zone.placement", "zone.grow_at", "zone.margin", "zone.half_width")
+PLACEMENT_KEYS = ("zone.placement", "zone.grow_at", "zone.margin", "zone.half_width", "zone.grow", "zone.grow_to")
 
 
 def _physics_key(p: dict) -> tuple:

@@ -133,6 +133,7 @@ class Built:
     inter: LawBonds | None = None
     backend: object = None
     dyn: ExplicitDynamics | None = None
+    clock: object = None  # a coupled run's CoupledClock
     fem_elements: int = 0
     end_held: bool = False  # the zone's last column is tied to the FEM or clamped
     impactors: dict = field(default_factory=dict)  # name -> ParticleImpactor (particles) or RigidImpactor (FEM)
@@ -185,8 +186,9 @@ def particle_zone(p: dict, x_end: float, tied: bool, clamped: bool):
     return (_particle_block if built.dim == 3 else _particle_zone)(built, x_end, tied, clamped)
 
 
-def beam(study, p: dict, mode: str, dem: str):
-    """(Simulation, Built) of a laminated beam (slice or quarter) under its impactors and supports."""
+def beam(study, p: dict, mode: str, dem: str, start=None):
+    """(Simulation, Built) of a laminated beam (slice or quarter) under its impactors and supports;
+    start: the state a coupled run continues from (coupled_simulation's)."""
     built = body_of(p, mode)
     t, L, dim = built.t, built.half_span, built.dim
     if dim == 3:
@@ -198,6 +200,15 @@ def beam(study, p: dict, mode: str, dem: str):
     if mode == "coupled" and not 2 * t < w < 0.8 * L:
         raise CaseError(f"zone.half_width = {w:g}: allowed between two particle sizes ({2 * t:g} m) and 0.8 x "
                         "half the span")
+    if mode == "coupled" and p.get("zone.grow"):
+        if p["mesh.file"]:
+            raise CaseError("zone.grow = true: not with a mesh file (mesh.file), whose line at the zone's edge fixes "
+                            "the zone; allowed: zone.grow = false")
+        xg = grow_limit(p, built)
+        # (a grown zone may reach grow_to itself)
+        if not w <= xg * (1 + 1e-9) or not xg < 0.8 * L or abs(xg / t - round(xg / t)) > 1e-6:
+            raise CaseError(f"zone.grow_to = {p['zone.grow_to']:g}: allowed whole particle spacings ({t:g} m) from "
+                            f"the zone's half width ({w:g} m) to below 0.8 x half the span ({0.8 * L:g} m)")
     for name in study.layout.names["impactors"]:  # a punch's face stays on the particles
         hw = p.get(f"impactors.{name}.half_width", 0.0)
         if mode == "coupled" and hw > w - 2 * t:
@@ -220,13 +231,14 @@ def beam(study, p: dict, mode: str, dem: str):
             backend.set_velocities(bottom, np.zeros((len(bottom), 3)))
     else:
         def make(extra_mass):
-            region = (_fem_block if dim == 3 else _fem_region)(p, built, lat.x[:, 0].max())
+            x0 = lat.x[:, 0].max()
+            region = _fem_block(p, built, x0) if dim == 3 else _fem_region(p, built, x0, reserve=p.get("zone.grow", False))
             dyn = ExplicitDynamics(region, supports=_fem_supports(study, p, region, L, dim, symmetry_x=False,
                                                                   groups=built.mesh_groups), extra_mass=extra_mass)
             built.node_bonds = _far_field_bonds(p, built, dyn)
             return dyn
-        sim, clock = coupled_simulation(p, make, scene, dem, t_end, models=models)
-        backend, built.dyn = clock.dem, clock.fem
+        sim, clock = coupled_simulation(p, make, scene, dem, t_end, models=models, start=start)
+        backend, built.dyn, built.clock = clock.dem, clock.fem, clock
         built.fem_elements = clock.fem.region.n_elements
         _with_far_field(sim, built)
     built.backend = backend
@@ -286,15 +298,37 @@ def _through(p: dict, lam: Laminate) -> np.ndarray:
     return np.unique(np.concatenate([np.linspace(a, b, n_run + 1) for a, b in zip(tops[:-1], tops[1:])]))
 
 
-def _fem_region(p: dict, built: Built, x0: float):
+def grow_limit(p: dict, built: Built) -> float:
+    """The farthest a grown zone may reach (m): zone.grow_to, or the last whole particle spacing
+    below 0.8 x half the span (a zone's limit)."""
+    d, L = built.t, built.half_span
+    if p["zone.grow_to"]:
+        return p["zone.grow_to"]
+    return (np.ceil(0.8 * L / d - 1e-9) - 1) * d
+
+
+def _along(p: dict, built: Built, x0: float, reserve: bool) -> np.ndarray:
+    """The far field's element edges along x from x0 (m): mesh.elements_along graded from x0 to
+    the support; with ``reserve`` (a zone that may grow) one element per particle spacing out to
+    grow_limit first, so any grown zone's edge is a mesh line and the remaining far field the
+    same mesh, less the columns that became particles."""
+    n, L = p["mesh.elements_along"], built.half_span
+    ratio = p["mesh.element_ratio"] ** (1.0 / max(n - 1, 1))
+    if not reserve:
+        return mesh.graded(x0, L, n, ratio, x0)
+    d, xg = built.t, grow_limit(p, built)
+    cols = np.arange(int(round(x0 / d)), int(round(xg / d))) * d
+    return np.concatenate([cols, mesh.graded(xg, L, n, ratio, xg)])
+
+
+def _fem_region(p: dict, built: Built, x0: float, reserve: bool = False):
     """FEM laminate on [x0, span / 2] x [0, H], one element row per particle row (or
-    mesh.elements_per_run per ply run), graded from x0 (or the mesh.file's part right of x0)."""
+    mesh.elements_per_run per ply run), graded from x0 (or the mesh.file's part right of x0);
+    ``reserve``: uniform at the particle spacing out to the growth limit first (_along)."""
     if p["mesh.file"]:
         return _file_region(p, built, x0)
     lam = built.lam
-    n = p["mesh.elements_along"]
-    ratio = p["mesh.element_ratio"] ** (1.0 / max(n - 1, 1))
-    xs = mesh.graded(x0, built.half_span, n, ratio, x0)
+    xs = _along(p, built, x0, reserve)
     ys = _through(p, lam)
     m = mesh.rectangle(xs, ys, p["mesh.element"])
     cy = m.p[1, m.t].mean(axis=0)

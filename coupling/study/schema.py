@@ -275,11 +275,16 @@ SECTIONS: dict[str, dict[str, Param]] = {
                            "reaches grow_at (Hoffman; Hashin interlaminar too with tied far-field plies), plus "
                            "margin (study/placement.py; half_width is then unused)", kind="str",
                            choices=("box", "auto")),
-        "grow_at": Param(0.5, "auto placement: the failure index (1 at initiation) that puts an element in the zone",
+        "grow_at": Param(0.5, "auto placement and growth: the failure index (1 at initiation) that puts an element in the zone",
                          low=0.05, high=2.0),
-        "margin": Param(0.0, "auto placement: the zone's margin beyond the flagged elements, and the widest gap "
+        "margin": Param(0.0, "auto placement and growth: the zone's margin beyond the flagged elements, and the widest gap "
                         "between them it bridges; 0: the laminate's thickness (a contact's own stress field decays over "
                         "about it) or four particle sizes, the larger", unit="m", low=0.0, high=0.5),
+        "grow": Param(False, "grow the zone during the run (beam): at each history sample the far field's failure "
+                      "indices (as placement's) are evaluated, and elements whose index reaches grow_at within margin "
+                      "of the zone's edge become particles, their state carried over (study/growth.py)", kind="bool"),
+        "grow_to": Param(0.0, "the farthest the zone may grow; the far field is meshed at the particle spacing out to "
+                         "it; 0: 0.8 x half the span", unit="m", low=0.0),
         "plies_per_particle": Param(1, "plies per particle row (the particle size is this x ply thickness; "
                                     "laminates)", kind="int", low=1, high=8),
         "particle_size": Param(0.0, "lattice spacing d (bonded beams: the depth holds a whole number of rows; a "

@@ -1,0 +1,354 @@
+"""A damage zone that grows during the run (``zone.grow = true``; the 2D beam).
+
+At each history sample the far field's failure indices are evaluated on the FEM's
+displacement at that FEM step: Hoffman's ply index when the zone's plies fail, and Hashin's
+interlaminar index when the far-field plies are tied (a cohesive far field delaminates by
+itself), the indices placement uses (study/placement.py). When an element that begins within
+``zone.margin`` of the zone's edge reaches ``zone.grow_at``, the zone grows over it and the
+margin, in whole particle spacings, up to ``zone.grow_to``: the coupled model of the grown zone
+is built, continues from the current state, and the old one is closed.
+
+The far field is meshed at the particle spacing out to grow_to (assemble._along), so the grown
+far field is the old mesh less the columns that became particles. What carries over:
+- FEM: each remaining node's displacement, velocity before the step's kicks, time and ledger,
+  and the cohesive node pairs' state.
+- Particles: the old ones keep their positions, velocities and bonds' state (matched by their
+  lattice position). The new ones, and the old interface column (slaved to the FEM until
+  now), take the FEM's displacement and velocity at their place (the old elements' shape
+  functions); their bonds' rest lengths are the lattice's, so they carry the elements'
+  strain. An interlaminar bond where the far field had a cohesive node pair takes its damage.
+- Impactors: their state; the particles they may touch get their last contact state.
+- Momentum: the converted particles' velocities are shifted by one common vector so that the
+  total momentum equals the old model's at that step (to round-off). The energy that changes
+  (the elements' strain energy against the bonds', the masses' new distribution) is reported
+  for each conversion; the ledger carries the work and the dissipation over.
+
+One approximation: the new model's first engine step evaluates the models (law bonds,
+impactors) again at the step the old one ended on, as a start does (no step behind it): the
+law bonds give the same forces, an impactor touches the particles from the position its last
+move took it to (a contact force one substep late, on that substep only).
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ..params import CaseError
+from ..simulation import energy_scale
+from .fields import FemIndices
+from .placement import grown_reach
+
+
+def matches(a: np.ndarray, b: np.ndarray, tol: float) -> np.ndarray:
+    """(len(b),) the row of ``a`` (k, dim) at each row of ``b`` within ``tol``, or -1."""
+    if len(a) == 0:
+        return np.full(len(b), -1)
+    dist, i = cKDTree(a).query(b, distance_upper_bound=tol)
+    return np.where(np.isfinite(dist), i, -1)
+
+
+def _node_keys(region, pairs) -> np.ndarray:
+    """(n, dim + 1) each FEM node's position and its side of a doubled interface (0 below, 1
+    above), apart by more than any tolerance: the two copies of a cohesive pair differ."""
+    side = np.zeros(region.n_nodes)
+    if pairs is not None and len(pairs):
+        side[pairs[:, 1]] = 1.0
+    return np.column_stack([region.X, side * 1e3])
+
+
+def _bond_map(old_pairs: np.ndarray, new_pairs: np.ndarray, particle: np.ndarray) -> np.ndarray:
+    """(len(new_pairs),) the old bond joining the same particles as each new one, or -1;
+    particle: (n_new,) each new particle's old id (-1: new)."""
+    n = int(max(old_pairs.max(initial=0), 0)) + 1
+    keys = np.sort(old_pairs, axis=1) @ np.array([n, 1])
+    order = np.argsort(keys)
+    ends = particle[new_pairs]
+    want = np.sort(ends, axis=1) @ np.array([n, 1])
+    at = np.clip(np.searchsorted(keys[order], want), 0, len(keys) - 1)
+    hit = (ends >= 0).all(axis=1) & (keys[order][at] == want)
+    return np.where(hit, order[at], -1)
+
+
+_BOND_ROWS = ("damage", "delta", "traction", "t_failed", "force")
+
+
+def _carry_bonds(new, old, rows: np.ndarray, law_rows: bool = True) -> None:
+    """New LawBonds' rows ``rows >= 0`` set to the old bonds' state there."""
+    at, src = np.flatnonzero(rows >= 0), rows[rows >= 0]
+    for k in _BOND_ROWS:
+        getattr(new, k)[at] = getattr(old, k)[src]
+    if law_rows:
+        for k in ("m0", "mf", "crushed"):
+            if hasattr(new.law, k) and hasattr(old.law, k):
+                getattr(new.law, k)[at] = getattr(old.law, k)[src]
+
+
+class Growth:
+    """The zone of one coupled beam run as it grows: decides, converts, and keeps the record
+    (each conversion's time, half width, energy and momentum jumps) and the ledger's offsets."""
+
+    def __init__(self, study, p: dict, dem: str, built, sim):
+        from .assemble import grow_limit
+        self.study, self.p, self.dem = study, p, dem
+        self.d, self.H = built.t, built.lam.thickness
+        self.limit = grow_limit(p, built)
+        self.margin = p["zone.margin"] or max(4 * self.d, self.H)
+        self.grow_at = p["zone.grow_at"]
+        self.half_width = float(built.lattice.x[:, 0].max())
+        self.events: list[tuple[float, float, float, float]] = []  # (t s, half width m, dE / E, |dP| / |P|)
+        self.offset = {"external_work": 0.0, "dissipated": 0.0}  # J, the ledger's accounts carried over
+        self.at_limit = False
+        # the particles' positions and velocities the current model's engine was built with
+        # (None: the first zone, from rest); a resume builds it from the same ones, so that
+        # what an engine derives at its build (its bonds' rest lengths) is the same
+        self.engine_start: tuple[np.ndarray, np.ndarray] | None = None
+        self._bind(sim, built)
+
+    # -- the current model ---------------------------------------------------------------------
+    def _bind(self, sim, built) -> None:
+        self.sim, self.built = sim, built
+        sim.growth = self
+        sim.probes["zone_half_width"] = lambda: self.half_width
+        energies = sim.energies
+        sim.energies = lambda: {k: v + self.offset.get(k, 0.0) for k, v in energies().items()}
+        region = built.dyn.region
+        self._indices = FemIndices(region, built.lam, 2)
+        self._criteria = (["Hoffman"] if self.p["zone.ply_failure"] else []) + \
+            (["interlaminar"] if built.fem_pairs is None or len(built.fem_pairs) == 0 else [])
+        X = region.X[region.mesh.t.T][:, :, 0]
+        self._x0, self._x1 = X.min(axis=1), X.max(axis=1)
+
+    def _p(self, half_width: float) -> dict:
+        """The parameters of the zone at ``half_width``, at the run's own step and substeps."""
+        clock = self.built.clock
+        return dict(self.p, **{"zone.half_width": half_width, "zone.placement": "box", "clock.dt": self.sim.dt,
+                               "clock.substeps": clock.m})
+
+    def _assemble(self, half_width: float, start=None):
+        try:
+            return self.study.assemble(self._p(half_width), "coupled", self.dem, start)
+        except CaseError as exc:  # the grown zone's model cannot be built: the run cannot go on as asked
+            raise CaseError(f"zone.grow = true: the zone grown to {half_width * 1e3:.4g} mm cannot be modelled "
+                            f"({exc})") from None
+
+    # -- at each sample -------------------------------------------------------------------------
+    def __call__(self, step: int):
+        """The Simulation of the grown zone if the far field asks for it at this sample, else None."""
+        if not self._criteria:
+            return None
+        clock = self.built.clock
+        hashin, hoffman = self._indices(self.built.dyn.region.centroid_strain_stress(clock.u_snapshot)[0])
+        index = np.maximum(hoffman if "Hoffman" in self._criteria else 0.0,
+                           hashin if "interlaminar" in self._criteria else 0.0)
+        flagged = index >= self.grow_at
+        w = self.half_width
+        reach = grown_reach(self._x0[flagged], self._x1[flagged], w, self.margin)
+        if reach <= w * (1 + 1e-9):
+            return None
+        target = min(np.ceil((reach + self.margin) / self.d - 1e-9) * self.d, self.limit)
+        if target <= w * (1 + 1e-9):
+            if not self.at_limit:
+                self.at_limit = True
+                self.sim.warnings.append(
+                    f"zone.grow: at t = {clock.t_snapshot:.4g} s the far field reached index {index[flagged].max():.2f} "
+                    f"at x <= {reach * 1e3:.4g} mm, beyond zone.grow_to = {self.limit * 1e3:.4g} mm: the zone grows no "
+                    "further")
+            return None
+        return self.convert(float(target))
+
+    def convert(self, half_width: float):
+        """The coupled model of the zone grown to ``half_width`` (m), continued from the current
+        state; the old model is closed."""
+        old_sim, old = self.sim, self.built
+        old_sim.sync() if old_sim.sync is not None else None
+        before = old_sim.energies()
+        transfer = _Transfer(old, old.clock.momentum_snapshot)
+        # the old engine closed first: YADE runs one scene per process
+        old_sim.close()
+        old_sim.close = lambda: self.sim.close()  # whoever holds the first model closes the current one
+        sim, built = self._assemble(half_width, transfer)
+        self.engine_start = transfer.engine_start
+        sim.warnings = old_sim.warnings
+        self.half_width = float(built.lattice.x[:, 0].max())
+        self._bind(sim, built)
+        after = sim.energies()
+        for k in self.offset:
+            self.offset[k] += before[k] - after[k]
+        stored = lambda e: e["kinetic"] + e["internal"]
+        P_old, P_new = old.clock.momentum_snapshot, built.clock.momentum_snapshot
+        self.events.append((float(built.clock.t_snapshot), self.half_width,
+                            (stored(after) - stored(before)) / max(energy_scale(before), 1e-300),
+                            float(np.linalg.norm(P_new - P_old) / max(np.linalg.norm(P_old), 1e-300))))
+        return sim
+
+    # -- checkpoints ----------------------------------------------------------------------------
+    def state(self) -> dict:
+        d = {"half_width": self.half_width, "events": np.array(self.events).reshape(-1, 4),
+             "offset": np.array([self.offset["external_work"], self.offset["dissipated"]]),
+             "at_limit": int(self.at_limit)}
+        if self.engine_start is not None:
+            d["engine_x"], d["engine_v"] = self.engine_start
+        return d
+
+    def rebuild(self, state: dict, sim):
+        """The Simulation a resume restores: the zone as it had grown by the checkpoint (``sim``,
+        the first zone's, is closed); its state then comes from the checkpoint."""
+        self.events = [tuple(float(x) for x in row) for row in np.asarray(state["events"]).reshape(-1, 4)]
+        off = np.asarray(state["offset"], float)
+        self.offset = {"external_work": float(off[0]), "dissipated": float(off[1])}
+        self.at_limit = bool(int(state["at_limit"]))
+        w = float(state["half_width"])
+        if abs(w - self.half_width) <= 1e-9 * w:
+            return sim
+        sim.close()
+        self.engine_start = (np.asarray(state["engine_x"]), np.asarray(state["engine_v"]))
+        new, built = self._assemble(w, _Replay(*self.engine_start))
+        new.warnings = sim.warnings
+        sim.close = lambda: self.sim.close()
+        self.half_width = w
+        self._bind(new, built)
+        return new
+
+    def qoi(self) -> dict[str, float]:
+        e = np.array(self.events).reshape(-1, 4)
+        return {"zone_conversions": float(len(e)), "zone_grown_half_width": self.half_width,
+                "zone_first_conversion_time": float(e[0, 0]) if len(e) else -1.0,
+                "zone_conversion_energy_jump": float(np.abs(e[:, 2]).max(initial=0.0)),
+                "zone_conversion_momentum_jump": float(e[:, 3].max(initial=0.0))}
+
+    def history(self) -> dict[str, np.ndarray]:
+        e = np.array(self.events).reshape(-1, 4)
+        return {"zone.conversion_time": e[:, 0], "zone.conversion_half_width": e[:, 1],
+                "zone.conversion_energy_jump": e[:, 2], "zone.conversion_momentum_jump": e[:, 3]}
+
+
+class _Replay:
+    """A resume's start: the engine built from the particles' state at the conversion (the
+    checkpoint then restores everything)."""
+
+    def __init__(self, x: np.ndarray, v: np.ndarray):
+        self.x, self.v = x, v
+
+    def __call__(self, fem, scene, itf, models):
+        return replace(scene, x=self.x, velocity=self.v)
+
+
+class _Transfer:
+    """The state of the old model at its last FEM step, handed to the grown zone's model as it
+    is built (coupled_simulation's ``start``)."""
+
+    def __init__(self, old, momentum: np.ndarray):
+        clock, backend = old.clock, old.backend
+        region = old.dyn.region
+        self.old, self.momentum = old, np.array(momentum, float)
+        self.region, self.pairs = region, old.fem_pairs
+        self.u, self.v, self.t = clock.u_snapshot.copy(), clock.v_start_snapshot.copy(), float(clock.t_snapshot)
+        self.fem_state = old.dyn.checkpoint_state()
+        self.x, self.vel = backend.positions(), backend.velocities()
+        self.X = old.lattice.x
+        self.slaved = np.zeros(len(self.X), bool)
+        self.slaved[clock.tie.itf.ids] = True
+
+    def __call__(self, fem, scene, itf, models):
+        from interfaces.transition import TransitionInterface
+        d = float(np.min(scene.radius)) * 2
+        tol = 1e-6 * d
+        # FEM: the remaining nodes, as they were
+        node = matches(_node_keys(self.region, self.pairs), _node_keys(fem.region, self._new_pairs(fem)), tol)
+        if np.any(node < 0):
+            raise CaseError("zone.grow = true: the grown far field is not a part of the old one (a mesh line "
+                            "off the particle spacing)")
+        s, old = fem.state, self.fem_state
+        s.u[:], s.v[:], s.a[:] = self.u[node], self.v[node], 0.0
+        s.t, s.step = self.t, int(old["step"])
+        fem.ledger = type(fem.ledger)(**{k: float(v) for k, v in old["ledger"].items()})
+        fem._u_at_forces, fem._t_at_forces = s.u.copy(), s.t
+        self._carry_node_bonds(fem, node)
+        # particles: the old ones as they are; the new and the formerly slaved at the FEM's field
+        was = matches(self.X, scene.x, tol)
+        x, v = scene.x.copy(), np.zeros_like(scene.x)
+        kept = was >= 0
+        x[kept], v[kept] = self.x[was[kept]], self.vel[was[kept]]
+        converted = ~kept | (kept & self.slaved[np.maximum(was, 0)])
+        ids = np.flatnonzero(converted)
+        W = TransitionInterface.build(self.region, scene.x, ids).W
+        dim = self.region.dim
+        x[ids, :dim] = scene.x[ids, :dim] + W @ self.u
+        v[ids, :dim] = W @ self.v
+        self._carry_models(models, was, x)
+        # momentum: the converted (now free) particles take up what the new split of the mass changed
+        free = np.ones(scene.n, bool)
+        free[itf.ids] = False
+        P = np.zeros(3)
+        P[:dim] = fem.m @ s.v
+        P += scene.mass[free] @ v[free] + sum((m.momentum() for m in models), np.zeros(3))
+        shifted = converted & free
+        if shifted.any():
+            dv = (self.momentum - P) / scene.mass[shifted].sum()
+            dv[dim:] = 0.0
+            v[shifted] += dv
+        self.engine_start = (x, v)
+        return replace(scene, x=x, velocity=v)
+
+    def _new_pairs(self, fem):
+        bonds = [m for m in fem.node_forces if hasattr(m, "bonds")]
+        return bonds[0].bonds.pairs if bonds else None
+
+    def _carry_node_bonds(self, fem, node: np.ndarray) -> None:
+        """The cohesive far field's node pairs that remain keep their state."""
+        new = [m for m in fem.node_forces if hasattr(m, "bonds")]
+        old = [m for m in self.old.dyn.node_forces if hasattr(m, "bonds")]
+        if not new or not old:
+            return
+        rows = _bond_map(old[0].bonds.pairs, new[0].bonds.pairs, node)
+        _carry_bonds(new[0].bonds, old[0].bonds, rows)
+        new[0].bonds.work, new[0].bonds.time = old[0].bonds.work, old[0].bonds.time
+        new[0].last = old[0].last
+
+    def _carry_models(self, models, was: np.ndarray, x: np.ndarray) -> None:
+        """Law bonds and impactors (the same families in the same order in both models)."""
+        old_models = (self.old.intra, self.old.inter, *self.old.impactors.values())
+        for new, old in zip(models, old_models):
+            if hasattr(new, "pairs"):
+                rows = _bond_map(old.pairs, new.pairs, was)
+                _carry_bonds(new, old, rows)
+                if hasattr(new.law, "snapback"):
+                    new.law.snapback = old.law.snapback
+                new.work, new.time = old.work, old.time
+                if new is models[1]:
+                    self._inter_from_node_pairs(new, rows)
+            else:
+                self._carry_impactor(new, old, was, x)
+
+    def _inter_from_node_pairs(self, inter, rows: np.ndarray) -> None:
+        """Interlaminar bonds new to the particles take the damage of the cohesive node pair at
+        their place (the far field delaminated there)."""
+        bonds = [m.bonds for m in self.old.dyn.node_forces if hasattr(m, "bonds")]
+        fresh = np.flatnonzero(rows < 0)
+        if not bonds or not fresh.size:
+            return
+        pairs = bonds[0].pairs
+        at = self.region.X[pairs[:, 0]]
+        mid = 0.5 * (inter.X[inter.pairs[fresh, 0]] + inter.X[inter.pairs[fresh, 1]])[:, : at.shape[1]]
+        src = matches(at, mid, 1e-6 * float(np.ptp(at[:, 0]) + 1e-3))
+        hit = src >= 0
+        inter.damage[fresh[hit]] = bonds[0].damage[src[hit]]
+        inter.t_failed[fresh[hit]] = bonds[0].t_failed[src[hit]]
+
+    @staticmethod
+    def _carry_impactor(new, old, was: np.ndarray, x: np.ndarray) -> None:
+        state = old.checkpoint_state()
+        if old._x_prev is None:  # not started: nothing but its own motion
+            new.imp.x, new.imp.v = np.array(state["x"]), np.array(state["v"])
+            new.work, new.stored, new.time = old.work, old.stored, old.time
+            return
+        src = was[new.ids]
+        rank = np.full(int(max(old.ids.max(), src.max(initial=0))) + 1, -1)
+        rank[old.ids] = np.arange(len(old.ids))
+        row = np.where(src >= 0, rank[np.maximum(src, 0)], -1)
+        x_prev, f_prev = x[new.ids].copy(), np.zeros((len(new.ids), 3))
+        x_prev[row >= 0] = np.asarray(state["x_prev"])[row[row >= 0]]
+        f_prev[row >= 0] = np.asarray(state["f_prev"])[row[row >= 0]]
+        new.restore_state(dict(state, x_prev=x_prev, f_prev=f_prev))

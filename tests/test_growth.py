@@ -1,0 +1,107 @@
+"""A zone that grows during the run (issue #25, part 2; coupling/study/growth.py).
+
+The coarse seed beam struck at 12 m/s from a 3 mm zone, growing where the far field's Hoffman
+index reaches 0.12 (a low threshold, so that the stress wave converts elements early and
+often): each conversion keeps the momentum to round-off and the beam's mass exactly, the zones
+are whole particle spacings that only grow, the zone's edge never damages, every far-field
+element the criterion flags ends inside the zone, and a run resumed from a checkpoint taken
+after a conversion finishes as the uninterrupted one, bit for bit."""
+import h5py
+import numpy as np
+import pytest
+
+from coupling.case import load_case
+from coupling.simulation import run_clock
+
+GROW = {"zone.grow": True, "zone.half_width": 3e-3, "impactors.cylinder.velocity": 12.0, "zone.grow_at": 0.12}
+
+
+def _sets(values: dict) -> list[str]:
+    return [f"--set={k}={str(v).lower() if isinstance(v, bool) else v}" for k, v in values.items()]
+
+
+def test_a_growing_zone_keeps_momentum_and_mass_and_only_grows(femdem, tmp_path):
+    """LIGGGHTS, 15 us of the impact (three conversions as the wave runs out)."""
+    code, s, err = femdem("run", "beam_impact_coarse", "--dem", "liggghts", *_sets(GROW),
+                          "--set=clock.t_end=1.5e-5", "--set=output.field_frames=6")
+    assert code == 0, err
+    q = s["qoi"]
+    assert q["zone_conversions"] >= 2
+    with h5py.File(tmp_path / "run0" / "history.h5") as h:
+        g = h["history"]
+        jumps_P, jumps_E = g["zone.conversion_momentum_jump"][:], g["zone.conversion_energy_jump"][:]
+        widths, series = g["zone.conversion_half_width"][:], g["zone_half_width"][:]
+    d = 2 * 0.15e-3  # two plies per particle row
+    assert len(jumps_P) == len(jumps_E) == len(widths) == q["zone_conversions"]
+    assert np.all(jumps_P < 1e-12)  # the converted particles take up what the new split of the mass changed
+    assert np.all(np.abs(jumps_E) < 1e-2)  # reported (the elements' against the bonds' energy; docs/status.md)
+    assert np.all(np.diff(np.concatenate([[3e-3], widths])) > 0)
+    assert np.allclose(widths / d, np.round(widths / d), atol=1e-6)
+    assert np.all(np.diff(series) >= 0) and series[-1] == pytest.approx(q["zone_grown_half_width"])
+    assert q["damage_at_zone_edge"] == 0.0
+    # one XDMF per zone: the frames before the first conversion, then each zone's that took one
+    assert (tmp_path / "run0" / "fields.xdmf").exists() and (tmp_path / "run0" / "fields-1.xdmf").exists()
+
+
+def test_the_grown_model_holds_the_beam_s_mass_and_covers_what_the_criterion_flags():
+    """In process: after the run the far field's nodes and the free particles carry the slice's
+    mass rho L H t exactly (the interface particles' masses are in the nodes), and no far-field
+    element left reaches grow_at."""
+    case = load_case("beam_impact_coarse", dict(GROW, **{"clock.t_end": 1.2e-5}))
+    study, p = case.scene, case.parameters
+    sim = study.build(p, "coupled", "liggghts")
+    try:
+        result = run_clock(sim)
+    finally:
+        sim.close()
+    growth = study.growth
+    assert result["simulation"] is growth.sim and growth.events
+    built, clock = growth.built, growth.built.clock
+    free = clock.tie.free_particles(built.lattice.n).astype(bool)
+    lam, d = built.lam, built.t
+    mass = built.dyn.m.sum() + clock.dem.scene.mass[free].sum()
+    assert mass == pytest.approx(lam.ply["rho"] * 0.5 * p["geometry.span"] * lam.thickness * d, rel=1e-12)
+    hashin, hoffman = growth._indices(built.dyn.region.centroid_strain_stress(clock.u_snapshot)[0])
+    assert hoffman.max() < p["zone.grow_at"]
+
+
+def test_a_run_resumed_after_a_conversion_finishes_as_the_uninterrupted_one(tmp_path):
+    """LAMMPS (its laws in the worker): a checkpoint taken after the zone grew, resumed in a new
+    process's model (the first zone's, rebuilt to the checkpoint's), gives the uninterrupted
+    history to the bit."""
+    case = load_case("beam_impact_coarse", dict(GROW, **{"clock.t_end": 1.2e-5}))
+    study, p = case.scene, case.parameters
+
+    def run(**kw):
+        sim = study.build(p, "coupled", "lammps")
+        try:
+            return run_clock(sim, **kw), study.growth
+        finally:
+            sim.close()
+
+    straight, growth = run()
+    first, dt = growth.events[0][0], growth.sim.dt
+    n = growth.sim.n_steps
+    every = int(round(first / dt)) + 1  # the first checkpoint after the first conversion
+    from coupling import checkpoint
+    run(run_dir=tmp_path, checkpoint_every=every)
+    ck = checkpoint.latest(tmp_path)
+    assert checkpoint.read(ck)["loop"]["growth"]["half_width"] > p["zone.half_width"]
+    resumed, _ = run(resume_from=ck)
+    for k, v in straight["history"].items():
+        assert np.array_equal(v, resumed["history"][k], equal_nan=True), k
+    assert n > every
+
+
+@pytest.mark.parametrize("sets, key", [
+    ({"zone.grow_to": 30e-3}, "zone.grow_to"),
+    ({"zone.grow_to": 2.4e-3}, "zone.grow_to"),
+])
+def test_bad_growth_settings_are_refused(femdem, sets, key):
+    code, s, err = femdem("run", "beam_impact_coarse", *_sets(dict(GROW, **sets)))
+    assert code == 2 and key in err and "allowed" in err and s is None
+
+
+def test_growth_on_a_3d_beam_is_refused(femdem):
+    code, s, err = femdem("run", "beam_impact_3d_coarse", "--set=zone.grow=true")
+    assert code == 2 and "zone.grow" in err and s is None
