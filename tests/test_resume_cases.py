@@ -125,7 +125,7 @@ def test_models_hosted_in_the_lammps_worker_resume_bit_for_bit(tmp_path):
 def test_resume_after_the_engine_worker_alone_was_killed(tmp_path):
     """The engine's worker process dies: the run ends with status error and keeps its last
     checkpoint; --resume finishes it to the uninterrupted result."""
-    args = ["run", "coupled_vibration", "--set", "dem.process=worker", "--set", "run.steps=6000",
+    args = ["run", "coupled_vibration", "--set", "dem.process=worker", "--set", "run.steps=3000",
             "--set", "output.checkpoint_every=1000", "--set", "clock.substeps=2"]
     assert _femdem(tmp_path, *args, "--out", "straight").returncode == 0
     proc = _femdem(tmp_path, *args, "--out", "killed", wait=False)

@@ -438,8 +438,8 @@ PLY_RANGES = dict(E11=st.floats(80e9, 200e9), E22=st.floats(6e9, 12e9), G12=st.f
                   nu12=st.floats(0.2, 0.35), rho=st.floats(1400.0, 1800.0))
 
 
-@settings(max_examples=2, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.generate],
-          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=1, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.generate],
+          suppress_health_check=[HealthCheck.function_scoped_fixture])  # (one draw: the suite's budget)
 @given(**PLY_RANGES)
 def test_beam_impact_coupled_equals_fem_over_ply_materials(femdem, E11, E22, G12, nu12, rho):
     """The seed beam with another ply (issue #22: the seed cases' materials), elastic: coupled
@@ -459,7 +459,7 @@ def test_beam_impact_coupled_equals_fem_over_ply_materials(femdem, E11, E22, G12
 COHESIVE = ["--set=laminates.beam.far_field_interfaces=cohesive"]
 
 
-@pytest.mark.parametrize("case", ["beam_impact_coarse", "beam_impact_3d_coarse"])
+@pytest.mark.parametrize("case", ["beam_impact_coarse", pytest.param("beam_impact_3d_coarse", marks=pytest.mark.slow)])
 def test_a_cohesive_far_field_holds_the_laminate_together_until_it_fails(femdem, case):
     """Seed 5.1 all-FEM (2D slice, 3D quarter), strengths out of reach: the plies meshed apart and
     joined by the interface law's node pairs bend as the plies sharing nodes (peak deflection

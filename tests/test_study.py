@@ -163,9 +163,9 @@ def test_a_study_written_only_as_a_case_file_runs_everywhere(femdem, mode, dem):
     assert s["scene"] == "three_point_bend" and s["parameters"]["materials.t300_914.E11"] == 130e9
 
 
-@pytest.mark.parametrize("mode, dem", [("coupled", "lammps"),
-                                       *[pytest.param(*md, marks=pytest.mark.slow)
-                                         for md in [("coupled", "yade"), *[("dem", e) for e in ENGINES]]]])
+@pytest.mark.parametrize("mode, dem", [pytest.param(*md, marks=pytest.mark.slow)  # coupled on LIGGGHTS:
+                                       for md in [("coupled", "lammps"), ("coupled", "yade"),  # the next test
+                                                  *[("dem", e) for e in ENGINES]]])
 def test_a_plate_study_runs_everywhere(femdem, mode, dem):
     """The clamped cross-ply plate under a sphere (tests/studies/), a quarter in 3D: every mode
     against the spring-mass closed form of a clamped orthotropic plate, the ledger closed.
@@ -448,7 +448,8 @@ def _file_elements(x0: float) -> int:
     return int(np.sum(m.points[quads, 0].min(axis=1) >= x0 - 1e-12))
 
 
-@pytest.mark.parametrize("mode, dem", [("fem", None), *[("coupled", e) for e in ENGINES], ("dem", "liggghts")])
+@pytest.mark.parametrize("mode, dem", [("fem", None), ("coupled", "liggghts"), ("coupled", "yade"),
+                                       pytest.param("coupled", "lammps", marks=pytest.mark.slow), ("dem", "liggghts")])
 def test_a_gmsh_meshed_study_runs_everywhere(femdem, mode, dem):
     """The three-point bend with its far field meshed by Gmsh (physical groups name the laminate
     and the support): every mode, the coupled one on every engine, against the same closed form;

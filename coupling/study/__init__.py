@@ -269,6 +269,7 @@ class Study:
             return
         plots.histories(self, p, history, qoi, plots_dir)
         plots.damage(history, plots_dir)
+        plots.zone(history, plots_dir)
 
 
 PLACEMENT_KEYS = ("zone.placement", "zone.grow_at", "zone.margin", "zone.half_width", "zone.grow", "zone.grow_to")

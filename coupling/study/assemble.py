@@ -318,7 +318,13 @@ def _along(p: dict, built: Built, x0: float, reserve: bool) -> np.ndarray:
         return mesh.graded(x0, L, n, ratio, x0)
     d, xg = built.t, grow_limit(p, built)
     cols = np.arange(int(round(x0 / d)), int(round(xg / d))) * d
-    return np.concatenate([cols, mesh.graded(xg, L, n, ratio, xg)])
+    # beyond, graded to the support from elements no shorter than the spacing (the stable step
+    # stays the particle-sized elements'): the most of mesh.elements_along that allows it
+    for k in range(n, 0, -1):
+        rest = mesh.graded(xg, L, k, p["mesh.element_ratio"] ** (1.0 / max(k - 1, 1)), xg)
+        if rest[1] - rest[0] >= d * (1 - 1e-9) or k == 1:
+            break
+    return np.concatenate([cols, rest])
 
 
 def _fem_region(p: dict, built: Built, x0: float, reserve: bool = False):

@@ -4,9 +4,11 @@ At each history sample the far field's failure indices are evaluated on the FEM'
 displacement at that FEM step: Hoffman's ply index when the zone's plies fail, and Hashin's
 interlaminar index when the far-field plies are tied (a cohesive far field delaminates by
 itself), the indices placement uses (study/placement.py). When an element that begins within
-``zone.margin`` of the zone's edge reaches ``zone.grow_at``, the zone grows over it and the
-margin, in whole particle spacings, up to ``zone.grow_to``: the coupled model of the grown zone
-is built, continues from the current state, and the old one is closed.
+``zone.margin`` of the zone's edge reaches ``zone.grow_at``, or an impactor's contact patch
+(the farthest particle it touches) comes closer than the margin to the edge, the zone grows
+over them and the margin, in whole particle spacings, up to ``zone.grow_to``: the coupled
+model of the grown zone is built, continues from the current state, and the old one is closed.
+The margin (0: the laminate's thickness or four particle sizes) is placement's.
 
 The far field is meshed at the particle spacing out to grow_to (assemble._along), so the grown
 far field is the old mesh less the columns that became particles. What carries over:
@@ -134,10 +136,20 @@ class Growth:
                             f"({exc})") from None
 
     # -- at each sample -------------------------------------------------------------------------
+    def contact_reach(self) -> float:
+        """m: the farthest particle an impactor touches (its patch), 0 without contact."""
+        reach = 0.0
+        for m in self.built.impactors.values():
+            x = self.built.backend.positions_of(m.ids)
+            touching = np.linalg.norm(x - m.imp.x, axis=1) < m.imp.radius
+            if m.imp.shape in ("sphere", "cylinder") and touching.any():
+                reach = max(reach, float(np.abs(x[touching, 0]).max()))
+        return reach
+
     def __call__(self, step: int):
-        """The Simulation of the grown zone if the far field asks for it at this sample, else None."""
-        if not self._criteria:
-            return None
+        """The Simulation of the grown zone if the far field or the contact asks for it at this
+        sample, else None: an element within the margin of the zone's edge at grow_at, or a
+        contact patch closer than the margin to the edge."""
         clock = self.built.clock
         hashin, hoffman = self._indices(self.built.dyn.region.centroid_strain_stress(clock.u_snapshot)[0])
         index = np.maximum(hoffman if "Hoffman" in self._criteria else 0.0,
@@ -145,8 +157,10 @@ class Growth:
         flagged = index >= self.grow_at
         w = self.half_width
         reach = grown_reach(self._x0[flagged], self._x1[flagged], w, self.margin)
-        if reach <= w * (1 + 1e-9):
+        contact = self.contact_reach()
+        if reach <= w * (1 + 1e-9) and contact + self.margin <= w * (1 + 1e-9):
             return None
+        reach = max(reach, contact)
         target = min(np.ceil((reach + self.margin) / self.d - 1e-9) * self.d, self.limit)
         if target <= w * (1 + 1e-9):
             if not self.at_limit:

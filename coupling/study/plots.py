@@ -146,3 +146,24 @@ def _section(ax, h, name, x, in_90, on, cols) -> None:
             ninety = in_90[pairs[hit]].all(axis=1)
             colors = np.where(ninety[:, None], plt.cm.Reds(0.3 + 0.7 * dmg[hit]), plt.cm.Oranges(0.3 + 0.7 * dmg[hit]))
         ax.add_collection(LineCollection(x[pairs[hit]][:, :, cols], colors=colors, linewidths=1.5))
+
+
+def zone(h: dict, plots_dir) -> None:
+    """zone.png: a growing zone's half width against time (ms), its conversions marked with the
+    energy each changed (relative to the total)."""
+    if "zone_half_width" not in h:
+        return
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(5.5, 3.6))
+    ax.step(1e3 * np.asarray(h["time"]), 1e3 * np.asarray(h["zone_half_width"]), where="post", lw=1.2)
+    for t, w, dE in zip(h.get("zone.conversion_time", []), h.get("zone.conversion_half_width", []),
+                        h.get("zone.conversion_energy_jump", [])):
+        ax.plot(1e3 * t, 1e3 * w, "o", ms=4, color="C1")
+        ax.annotate(f"dE/E = {dE:.1e}", (1e3 * t, 1e3 * w), textcoords="offset points", xytext=(4, -10), fontsize=7)
+    ax.set_xlabel("time (ms)")
+    ax.set_ylabel("zone half width (mm)")
+    ax.set_title("the damage zone as it grew")
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(plots_dir / "zone.png", dpi=120)
+    plt.close(fig)
