@@ -48,7 +48,7 @@ def _kill_after_checkpoint(args, out: Path, timeout=120):
                            "output.history_every=20"]),
     ("coupled_vibration --dem liggghts", ["run.steps=4000", "output.checkpoint_every=400", "clock.substeps=2",
                                           "output.history_every=20"]),
-    ("coupled_vibration --dem lammps", ["run.steps=4000", "output.checkpoint_every=400", "clock.substeps=2",
+    ("coupled_vibration --dem lammps", ["run.steps=2000", "output.checkpoint_every=400", "clock.substeps=2",
                                         "output.history_every=20"]),
     # law bonds on FEM nodes (the layers' interface) carry damage that the checkpoint must keep
     ("rod_impact_coarse", ["output.checkpoint_every=300", "output.history_every=20"]),

@@ -406,8 +406,8 @@ def test_the_all_dem_seed_beam_lies_in_its_bracket(femdem):
     assert q["spring_mass_estimate"] < q["peak_centre_displacement"] < q["spring_mass_estimate_upper"]
 
 
-@settings(max_examples=2, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.generate],
-          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=1, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.generate],
+          suppress_health_check=[HealthCheck.function_scoped_fixture])  # (one draw: the suite's budget)
 @given(E11=st.floats(80e9, 200e9), E22=st.floats(6e9, 12e9), velocity=st.floats(0.5, 2.0), mass=st.floats(0.01, 0.05),
        layup=st.sampled_from(["[0_2/90_2]s", "[90_2/0_2]s", "[0_4/90_2]s"]))
 def test_the_plate_holds_its_closed_form_for_other_materials_and_impacts(femdem, E11, E22, velocity, mass, layup):
