@@ -108,12 +108,18 @@ class RunOutput:
         the run writes them again (and the XDMF of an attempt that ended with an error)."""
         for name in [*self.dir.glob("fields*.xdmf"), *self.dir.glob("fields*.h5")]:
             name.unlink(missing_ok=True)
-        for f in sorted((self.dir / FRAMES).glob("frame-*.h5")):
+        d, used = self.dir / FRAMES, set()
+        if (d / "mesh.h5").exists():  # the one mesh file of a run begun before meshes were numbered
+            os.replace(d / "mesh.h5", d / "mesh-000.h5")
+        for f in sorted(d.glob("frame-*.h5")):
             with h5py.File(f, "r") as h5:
                 late = float(h5.attrs["time"]) > t_end * (1 + 1e-12)
-            if late:
-                f.unlink()
-        self._frames = len(list((self.dir / FRAMES).glob("frame-*.h5")))
+                mesh = str(h5.attrs.get("mesh", "mesh-000.h5"))
+            f.unlink() if late else used.add(mesh)
+        for mesh in d.glob("mesh-*.h5"):  # a grown zone's mesh the run will write again
+            if mesh.name not in used:
+                mesh.unlink()
+        self._frames = len(list(d.glob("frame-*.h5")))
 
     def frame(self, t: float, f: FieldFrame) -> None:
         """Store one field frame: its own small HDF5 file, published by a rename, so a kill
@@ -162,7 +168,7 @@ class RunOutput:
         groups: dict[str, list] = {}
         for f in files:
             with h5py.File(f, "r") as h5:
-                groups.setdefault(str(h5.attrs["mesh"]), []).append(f)
+                groups.setdefault(str(h5.attrs.get("mesh", "mesh-000.h5")), []).append(f)
         for k, mesh in enumerate(groups):  # in the order the frames use them
             with h5py.File(d / mesh, "r") as h5:
                 # blocks in the frame's order (HDF5 lists keys sorted: the index prefix keeps the

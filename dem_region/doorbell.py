@@ -32,24 +32,14 @@ HOOK, GO, ADVANCE, DONE = range(4)
 STEPS, ASK, DT, ENGINE_S, MODELS_S = range(5)
 
 
-# Spinning and yielding keep a core busy while waiting: right when the orchestrator and its
-# engine's worker have a core each, a loss when more processes share the cores (the test
-# suite's parallel workers: each run then takes two cores). FEMDEM_BUSY_WAIT=0 waits in the
-# socket's select from the first round.
-BUSY_WAIT = os.environ.get("FEMDEM_BUSY_WAIT", "1") != "0"
-
-
 class Backoff:
     """Wait politely for a counter, watching a socket too: spin ``spin`` rounds, then yield the
     core until ``yield_rounds`` (a few milliseconds), then wait in the socket's select for
     ``longest`` s at a time, which a message ends at once. ``poll(timeout)`` (a Connection's)
-    costs about 20 us (it builds a selector), so before that it is asked every 32nd round.
-    Without busy waiting (BUSY_WAIT) the defaults are 0 and 0."""
+    costs about 20 us (it builds a selector), so before that it is asked every 32nd round."""
 
-    def __init__(self, spin: int | None = None, yield_rounds: int | None = None, longest: float = 2e-4):
-        self.spin = (64 if BUSY_WAIT else 0) if spin is None else spin
-        self.yield_rounds = (5000 if BUSY_WAIT else 0) if yield_rounds is None else yield_rounds
-        self.longest = longest
+    def __init__(self, spin: int = 64, yield_rounds: int = 5000, longest: float = 2e-4):
+        self.spin, self.yield_rounds, self.longest = spin, yield_rounds, longest
         self.rounds = 0
 
     def reset(self) -> None:

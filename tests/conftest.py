@@ -5,9 +5,6 @@ import os
 # other worker preempted: a coupled seed test took 158 s in the suite against 23 s alone)
 if int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1")) > 1:
     os.environ.setdefault("NUMBA_NUM_THREADS", "1")
-    # ... and an engine's worker and its orchestrator wait for each other without spinning:
-    # spinning, each LAMMPS run took both cores from the other pytest worker
-    os.environ.setdefault("FEMDEM_BUSY_WAIT", "0")
 
 import coupling  # noqa: E402, F401  (first: it sets the BLAS threads before numpy loads)
 import json

@@ -23,7 +23,7 @@ def _sets(values: dict) -> list[str]:
 def test_a_growing_zone_keeps_momentum_and_mass_and_only_grows(femdem, tmp_path):
     """LIGGGHTS, 15 us of the impact (three conversions as the wave runs out)."""
     code, s, err = femdem("run", "beam_impact_coarse", "--dem", "liggghts", *_sets(GROW),
-                          "--set=clock.t_end=1.5e-5", "--set=output.field_frames=6")
+                          "--set=clock.t_end=1.5e-5", "--set=output.field_frames=6", "--set=output.history_every=7")
     assert code == 0, err
     q = s["qoi"]
     assert q["zone_conversions"] >= 2
@@ -31,6 +31,7 @@ def test_a_growing_zone_keeps_momentum_and_mass_and_only_grows(femdem, tmp_path)
         g = h["history"]
         jumps_P, jumps_E = g["zone.conversion_momentum_jump"][:], g["zone.conversion_energy_jump"][:]
         widths, series = g["zone.conversion_half_width"][:], g["zone_half_width"][:]
+        kinetic, steps = g["kinetic"][:], s["clock"]["steps"]
     d = 2 * 0.15e-3  # two plies per particle row
     assert len(jumps_P) == len(jumps_E) == len(widths) == q["zone_conversions"]
     assert np.all(jumps_P < 1e-12)  # the converted particles take up what the new split of the mass changed
@@ -39,6 +40,8 @@ def test_a_growing_zone_keeps_momentum_and_mass_and_only_grows(femdem, tmp_path)
     assert np.allclose(widths / d, np.round(widths / d), atol=1e-6)
     assert np.all(np.diff(series) >= 0) and series[-1] == pytest.approx(q["zone_grown_half_width"])
     assert q["damage_at_zone_edge"] == 0.0
+    # the last sample (a step no multiple of the sampling's) is the grown model's last step's
+    assert steps % 7 and kinetic[-1] != kinetic[-2]
     # one XDMF per zone: the frames before the first conversion, then each zone's that took one
     assert (tmp_path / "run0" / "fields.xdmf").exists() and (tmp_path / "run0" / "fields-1.xdmf").exists()
     assert (tmp_path / "run0" / "plots" / "zone.png").exists()
@@ -96,6 +99,7 @@ def test_a_run_resumed_after_a_conversion_finishes_as_the_uninterrupted_one(tmp_
 @pytest.mark.parametrize("sets, key", [
     ({"zone.grow_to": 30e-3}, "zone.grow_to"),
     ({"zone.grow_to": 2.4e-3}, "zone.grow_to"),
+    ({"coupling.tie": "penalty"}, "coupling.tie"),
 ])
 def test_bad_growth_settings_are_refused(femdem, sets, key):
     code, s, err = femdem("run", "beam_impact_coarse", *_sets(dict(GROW, **sets)))

@@ -215,9 +215,8 @@ class Study:
         """The Simulation of ``p`` in ``mode`` on engine ``dem``; start: the state a grown zone's
         coupled model continues from (study/growth.py), None for a run from rest."""
         sim, built = self.assemble(p, mode, dem, start)
-        self.growth = None
-        if mode == "coupled" and p.get("zone.grow") and start is None:
-            self.growth = Growth(self, p, dem, built, sim)
+        if mode == "coupled":  # (an all-FEM twin built meanwhile leaves the coupled run's record)
+            self.growth = Growth(self, p, dem, built, sim) if p.get("zone.grow") else None
         return sim
 
     def assemble(self, p: dict, mode: str, dem: str, start=None):

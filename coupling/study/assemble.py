@@ -201,6 +201,9 @@ def beam(study, p: dict, mode: str, dem: str, start=None):
         raise CaseError(f"zone.half_width = {w:g}: allowed between two particle sizes ({2 * t:g} m) and 0.8 x "
                         "half the span")
     if mode == "coupled" and p.get("zone.grow"):
+        if p["coupling.tie"] != "kinematic":
+            raise CaseError(f"coupling.tie = {p['coupling.tie']!r}: a growing zone rebuilds a kinematic tie (its "
+                            "particles' momentum in the FEM's nodes); allowed with zone.grow = true: kinematic")
         if p["mesh.file"]:
             raise CaseError("zone.grow = true: not with a mesh file (mesh.file), whose line at the zone's edge fixes "
                             "the zone; allowed: zone.grow = false")

@@ -101,7 +101,8 @@ class Growth:
         self.half_width = float(built.lattice.x[:, 0].max())
         self.events: list[tuple[float, float, float, float]] = []  # (t s, half width m, dE / E, |dP| / |P|)
         self.offset = {"external_work": 0.0, "dissipated": 0.0}  # J, the ledger's accounts carried over
-        self.at_limit = False
+        self.limit_warning = ""
+        self.step0 = 0  # the loop step the current model started at
         # the particles' positions and velocities the current model's engine was built with
         # (None: the first zone, from rest); a resume builds it from the same ones, so that
         # what an engine derives at its build (its bonds' rest lengths) is the same
@@ -112,6 +113,8 @@ class Growth:
     def _bind(self, sim, built) -> None:
         self.sim, self.built = sim, built
         sim.growth = self
+        # its clock counts FEM steps from its own start: the run's last one, in its count
+        built.clock.last_window = sim.n_steps - self.step0
         sim.probes["zone_half_width"] = lambda: self.half_width
         energies = sim.energies
         sim.energies = lambda: {k: v + self.offset.get(k, 0.0) for k, v in energies().items()}
@@ -128,12 +131,13 @@ class Growth:
         return dict(self.p, **{"zone.half_width": half_width, "zone.placement": "box", "clock.dt": self.sim.dt,
                                "clock.substeps": clock.m})
 
-    def _assemble(self, half_width: float, start=None):
+    def _assemble(self, half_width: float, start=None, error=CaseError):
         try:
             return self.study.assemble(self._p(half_width), "coupled", self.dem, start)
         except CaseError as exc:  # the grown zone's model cannot be built: the run cannot go on as asked
-            raise CaseError(f"zone.grow = true: the zone grown to {half_width * 1e3:.4g} mm cannot be modelled "
-                            f"({exc})") from None
+            # (mid-run, an error: the run keeps its directory, its checkpoint and its history)
+            raise error(f"zone.grow = true: the zone grown to {half_width * 1e3:.4g} mm cannot be modelled "
+                        f"({exc})") from None
 
     # -- at each sample -------------------------------------------------------------------------
     def contact_reach(self) -> float:
@@ -163,30 +167,34 @@ class Growth:
         reach = max(reach, contact)
         target = min(np.ceil((reach + self.margin) / self.d - 1e-9) * self.d, self.limit)
         if target <= w * (1 + 1e-9):
-            if not self.at_limit:
-                self.at_limit = True
-                self.sim.warnings.append(
-                    f"zone.grow: at t = {clock.t_snapshot:.4g} s the far field reached index {index[flagged].max():.2f} "
-                    f"at x <= {reach * 1e3:.4g} mm, beyond zone.grow_to = {self.limit * 1e3:.4g} mm: the zone grows no "
-                    "further")
+            if not self.limit_warning:
+                self.limit_warning = (
+                    f"zone.grow: at t = {clock.t_snapshot:.4g} s the far field (index {index.max(initial=0.0):.2f}) or "
+                    f"the contact patch ({contact * 1e3:.3g} mm) asks for the zone out to x = "
+                    f"{(reach + self.margin) * 1e3:.4g} mm, beyond zone.grow_to = {self.limit * 1e3:.4g} mm: the zone "
+                    "grows no further")
+                self.sim.warnings.append(self.limit_warning)
             return None
-        return self.convert(float(target))
+        return self.convert(float(target), step)
 
-    def convert(self, half_width: float):
-        """The coupled model of the zone grown to ``half_width`` (m), continued from the current
-        state; the old model is closed."""
+    def convert(self, half_width: float, step: int):
+        """The coupled model of the zone grown to ``half_width`` (m), continued from the state at
+        loop step ``step``; the old model is closed."""
         old_sim, old = self.sim, self.built
         old_sim.sync() if old_sim.sync is not None else None
         before = old_sim.energies()
         transfer = _Transfer(old, old.clock.momentum_snapshot)
         # the old engine closed first: YADE runs one scene per process
         old_sim.close()
+        sim, built = self._assemble(half_width, transfer, error=RuntimeError)
         old_sim.close = lambda: self.sim.close()  # whoever holds the first model closes the current one
-        sim, built = self._assemble(half_width, transfer)
-        self.engine_start = transfer.engine_start
-        sim.warnings = old_sim.warnings
+        self.engine_start, self.step0 = transfer.engine_start, step
+        sim.warnings = old_sim.warnings + [w for w in sim.warnings if w not in old_sim.warnings]
         self.half_width = float(built.lattice.x[:, 0].max())
         self._bind(sim, built)
+        clock = built.clock
+        clock.interface_work += old.clock.interface_work  # the tie's work over the whole run
+        clock.interface_work_snapshot += old.clock.interface_work
         after = sim.energies()
         for k in self.offset:
             self.offset[k] += before[k] - after[k]
@@ -201,7 +209,7 @@ class Growth:
     def state(self) -> dict:
         d = {"half_width": self.half_width, "events": np.array(self.events).reshape(-1, 4),
              "offset": np.array([self.offset["external_work"], self.offset["dissipated"]]),
-             "at_limit": int(self.at_limit)}
+             "limit_warning": np.frombuffer(self.limit_warning.encode(), np.uint8), "step0": self.step0}
         if self.engine_start is not None:
             d["engine_x"], d["engine_v"] = self.engine_start
         return d
@@ -212,7 +220,10 @@ class Growth:
         self.events = [tuple(float(x) for x in row) for row in np.asarray(state["events"]).reshape(-1, 4)]
         off = np.asarray(state["offset"], float)
         self.offset = {"external_work": float(off[0]), "dissipated": float(off[1])}
-        self.at_limit = bool(int(state["at_limit"]))
+        self.limit_warning = bytes(np.asarray(state["limit_warning"], np.uint8)).decode()
+        self.step0 = int(state["step0"])
+        if self.limit_warning and self.limit_warning not in sim.warnings:
+            sim.warnings.append(self.limit_warning)
         w = float(state["half_width"])
         if abs(w - self.half_width) <= 1e-9 * w:
             return sim
@@ -278,7 +289,9 @@ class _Transfer:
         s.u[:], s.v[:], s.a[:] = self.u[node], self.v[node], 0.0
         s.t, s.step = self.t, int(old["step"])
         fem.ledger = type(fem.ledger)(**{k: float(v) for k, v in old["ledger"].items()})
-        fem._u_at_forces, fem._t_at_forces = s.u.copy(), s.t
+        fem._u_at_forces, fem._t_at_forces, fem._dt = s.u.copy(), s.t, float(old["_dt"])
+        if np.shape(old["_reaction_prev"]) == np.shape(fem._reaction_prev):  # the same supported DOFs
+            fem._reaction_prev = np.array(old["_reaction_prev"])
         self._carry_node_bonds(fem, node)
         # particles: the old ones as they are; the new and the formerly slaved at the FEM's field
         was = matches(self.X, scene.x, tol)
