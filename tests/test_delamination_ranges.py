@@ -5,8 +5,8 @@ and substep count inside the ranges `femdem params dcb_coarse` lists, and every 
 pass the case's own closed-form checks at the default tolerances. Samples the scene warns
 about (a cohesive zone the closed form cannot describe: the scene says so before it runs) are
 outside the verified domain and are drawn again. The default suite draws one coarse
-specimen of each all-FEM and of the DCB and SLB coupled (derandomized: the same draw on every
-machine; tests/test_damage.py runs the defaults coupled); `-m slow` draws more, at random,
+specimen of each, all-FEM and coupled (derandomized: the same draw on every machine;
+tests/test_damage.py runs the DCB's and SLB's defaults coupled, the ENF's with -m slow); `-m slow` draws more, at random,
 and on every engine.
 """
 import pytest
@@ -88,7 +88,6 @@ def test_dcb_holds_over_its_ranges(femdem, m, h, a_rel, substeps, r):
     assert s["qoi"]["cohesive_zone_bonds"] >= 3  # the zone the run measured is resolved
 
 
-@pytest.mark.slow  # suite budget: the default ENF runs coupled in tests/test_damage.py, its ranges all-FEM here
 @COARSE
 @given(m=MATERIAL, h=THICK, L_rel=st.floats(1.2, 2.0), a_rel=st.floats(0.4, 0.6),
        substeps=st.sampled_from([0, 1, 2]), r=RADIUS)

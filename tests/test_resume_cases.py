@@ -25,7 +25,7 @@ FULL = {"beam_impact", "beam_impact_3d", "cfrp_beam_impact", "cfrp_beam_impact_3
         "dcb", "enf", "mixed_mode"}  # each has a coarse variant below
 SLOW = {"panel_buckling_coarse", "cfrp_beam_impact_3d_coarse", "beam_impact_3d_coarse", "dcb_coarse", "enf_coarse",
         "mixed_mode_coarse", "rod_impact_coarse", "beam_impact_coarse", "coupled_vibration", "bonded_beam_bending",
-        "ply_fracture", "column_buckling", "cfrp_beam_impact_coarse"}
+        "ply_fracture", "column_buckling", "cfrp_beam_impact_coarse", "bond_strength"}
 CASES = [pytest.param(c, marks=pytest.mark.slow) if c in SLOW else c for c in bundled_cases() if c not in FULL]
 ENV = {**os.environ, "PYTHONPATH": str(ROOT)}
 
