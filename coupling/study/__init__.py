@@ -145,11 +145,11 @@ class Study:
             refuse.append(("mesh", "elements_width"))
         if shape not in ("beam", "beam_3d"):  # a zone about x = 0 placed from the estimate: beams'
             refuse += [("zone", k) for k in ("placement", "grow_at", "margin")]
-        if shape != "beam":  # a zone grown during the run: the 2D beam's so far
+        if shape not in ("beam", "beam_3d"):  # a zone grown during the run: the beams' so far
             for key in ("grow", "grow_to"):
                 if given("zone", key):
-                    raise CaseError(f"zone.{key}: a zone grown during the run is built for geometry.shape = 'beam' "
-                                    f"so far; allowed for {shape!r}: leave it out")
+                    raise CaseError(f"zone.{key}: a zone grown during the run is built for the beams (geometry.shape "
+                                    f"= 'beam' or 'beam_3d') so far; allowed for {shape!r}: leave it out")
                 refuse.append(("zone", key))
         if shape != "beam":
             if given("mesh", "file"):

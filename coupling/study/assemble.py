@@ -204,7 +204,7 @@ def beam(study, p: dict, mode: str, dem: str, start=None):
         if p["coupling.tie"] != "kinematic":
             raise CaseError(f"coupling.tie = {p['coupling.tie']!r}: a growing zone rebuilds a kinematic tie (its "
                             "particles' momentum in the FEM's nodes); allowed with zone.grow = true: kinematic")
-        if p["mesh.file"]:
+        if p.get("mesh.file"):
             raise CaseError("zone.grow = true: not with a mesh file (mesh.file), whose line at the zone's edge fixes "
                             "the zone; allowed: zone.grow = false")
         xg = grow_limit(p, built)
@@ -235,7 +235,8 @@ def beam(study, p: dict, mode: str, dem: str, start=None):
     else:
         def make(extra_mass):
             x0 = lat.x[:, 0].max()
-            region = _fem_block(p, built, x0) if dim == 3 else _fem_region(p, built, x0, reserve=p.get("zone.grow", False))
+            grow = p.get("zone.grow", False)
+            region = _fem_block(p, built, x0, grow) if dim == 3 else _fem_region(p, built, x0, reserve=grow)
             dyn = ExplicitDynamics(region, supports=_fem_supports(study, p, region, L, dim, symmetry_x=False,
                                                                   groups=built.mesh_groups), extra_mass=extra_mass)
             built.node_bonds = _far_field_bonds(p, built, dyn)
@@ -401,13 +402,11 @@ def _split(p: dict, built: Built, m, run: np.ndarray):
     return type(m)(np.ascontiguousarray(P), np.ascontiguousarray(T))
 
 
-def _fem_block(p: dict, built: Built, x0: float):
+def _fem_block(p: dict, built: Built, x0: float, reserve: bool = False):
     """Hex8 laminate on [x0, span / 2] x [0, W / 2] x [0, H], one element layer per particle row
-    (or mesh.elements_per_run per ply run)."""
+    (or mesh.elements_per_run per ply run); ``reserve``: as _fem_region's."""
     lam = built.lam
-    n = p["mesh.elements_along"]
-    ratio = p["mesh.element_ratio"] ** (1.0 / max(n - 1, 1))
-    m = mesh.box(mesh.graded(x0, built.half_span, n, ratio, x0),
+    m = mesh.box(_along(p, built, x0, reserve),
                  np.linspace(0.0, 0.5 * p["geometry.width"], p["mesh.elements_width"] + 1), _through(p, lam), "hex8")
     run = np.searchsorted(np.cumsum(lam.plies) * lam.ply_thickness, m.p[2, m.t].mean(axis=0))
     C = np.array([lam.C(lam.angles[b]) for b in run])

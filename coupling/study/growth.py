@@ -1,4 +1,4 @@
-"""A damage zone that grows during the run (``zone.grow = true``; the 2D beam).
+"""A damage zone that grows during the run (``zone.grow = true``; the beams, 2D and 3D).
 
 At each history sample the far field's failure indices are evaluated on the FEM's
 displacement at that FEM step: Hoffman's ply index when the zone's plies fail, and Hashin's
@@ -119,7 +119,7 @@ class Growth:
         energies = sim.energies
         sim.energies = lambda: {k: v + self.offset.get(k, 0.0) for k, v in energies().items()}
         region = built.dyn.region
-        self._indices = FemIndices(region, built.lam, 2)
+        self._indices = FemIndices(region, built.lam, built.dim)
         self._criteria = (["Hoffman"] if self.p["zone.ply_failure"] else []) + \
             (["interlaminar"] if built.fem_pairs is None or len(built.fem_pairs) == 0 else [])
         X = region.X[region.mesh.t.T][:, :, 0]
@@ -145,7 +145,11 @@ class Growth:
         reach = 0.0
         for m in self.built.impactors.values():
             x = self.built.backend.positions_of(m.ids)
-            touching = np.linalg.norm(x - m.imp.x, axis=1) < m.imp.radius
+            r = x - m.imp.x
+            if m.imp.axis is not None:  # a cylinder: the distance from its axis
+                a = np.asarray(m.imp.axis, float)
+                r = r - np.outer(r @ a, a) / (a @ a)
+            touching = np.linalg.norm(r, axis=1) < m.imp.radius
             if m.imp.shape in ("sphere", "cylinder") and touching.any():
                 reach = max(reach, float(np.abs(x[touching, 0]).max()))
         return reach

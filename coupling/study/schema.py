@@ -280,7 +280,7 @@ SECTIONS: dict[str, dict[str, Param]] = {
         "margin": Param(0.0, "auto placement and growth: the zone's margin beyond the flagged elements, and the widest gap "
                         "between them it bridges; 0: the laminate's thickness (a contact's own stress field decays over "
                         "about it) or four particle sizes, the larger", unit="m", low=0.0, high=0.5),
-        "grow": Param(False, "grow the zone during the run (beam): at each history sample the far field's failure "
+        "grow": Param(False, "grow the zone during the run (beams): at each history sample the far field's failure "
                       "indices (as placement's) are evaluated, and elements whose index reaches grow_at within margin "
                       "of the zone's edge become particles, their state carried over (study/growth.py)", kind="bool"),
         "grow_to": Param(0.0, "the farthest the zone may grow; the far field is meshed at the particle spacing out to "
