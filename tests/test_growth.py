@@ -9,6 +9,8 @@ after a conversion finishes as the uninterrupted one, bit for bit."""
 import h5py
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, Phase, given, settings
+from hypothesis import strategies as st
 
 from coupling.case import load_case
 from coupling.simulation import run_clock
@@ -119,3 +121,49 @@ def test_growth_on_a_plate_is_refused(femdem):
     plate = Path(__file__).parent / "studies" / "clamped_plate.toml"
     code, s, err = femdem("run", str(plate), "--set=zone.grow=true")
     assert code == 2 and "zone.grow" in err and s is None
+
+
+RANGES = {"geometry.span": (40e-3, 80e-3), "impactors.cylinder.radius": (3e-3, 8e-3),
+          "impactors.cylinder.velocity": (1.0, 12.0), "impactors.cylinder.mass_per_width": (0.3, 1.2)}
+
+
+def _grows_anywhere(femdem, tmp_path, draw: dict, engine: str, t_end: float):
+    """A growing zone over the beam's documented ranges (span, impactor radius, speed, mass),
+    the starting zone (3 to 10 spacings) and grow_at: it runs; each conversion keeps the
+    momentum to round-off; the zones only grow, in whole spacings; the zone's edge never
+    damages."""
+    values = {k: draw[k] for k in RANGES}
+    d = 2 * 0.15e-3
+    sets = dict(values, **{"zone.grow": True, "zone.half_width": draw["columns"] * d, "zone.grow_at": draw["grow_at"],
+                           "clock.t_end": t_end})
+    code, s, err = femdem("run", "beam_impact_coarse", "--dem", engine, *_sets(sets))
+    assert code == 0, (sets, err)
+    q = s["qoi"]
+    run = sorted(p for p in tmp_path.iterdir() if p.name.startswith("run"))[-1]
+    with h5py.File(run / "history.h5") as h:
+        g = h["history"]
+        jumps_P, widths = g["zone.conversion_momentum_jump"][:], g["zone.conversion_half_width"][:]
+    assert np.all(jumps_P < 1e-12), sets
+    assert np.all(np.diff(np.concatenate([[sets["zone.half_width"]], widths])) > 0)
+    assert np.allclose(widths / d, np.round(widths / d), atol=1e-6)
+    assert q["damage_at_zone_edge"] == 0.0, (sets, q)
+
+
+_DRAW = dict(**{k: st.floats(*v) for k, v in RANGES.items()}, columns=st.integers(3, 10), grow_at=st.floats(0.1, 0.5))
+
+
+@settings(max_examples=1, deadline=None, phases=[Phase.explicit, Phase.generate],
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(draw=st.fixed_dictionaries(_DRAW))
+def test_a_zone_grows_anywhere_in_the_beam_s_ranges(femdem, tmp_path, draw):
+    """One draw (the suite's), 20 us of the impact on LIGGGHTS."""
+    _grows_anywhere(femdem, tmp_path, draw, "liggghts", 2e-5)
+
+
+@pytest.mark.slow
+@settings(max_examples=6, deadline=None, derandomize=False,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(draw=st.fixed_dictionaries(_DRAW), engine=st.sampled_from(["liggghts", "lammps", "yade"]))
+def test_a_zone_grows_anywhere_in_the_beam_s_ranges_on_every_engine(femdem, tmp_path, draw, engine):
+    """Six random draws over the three engines, the whole impact (0.6 ms)."""
+    _grows_anywhere(femdem, tmp_path, draw, engine, 0.0)

@@ -253,7 +253,7 @@ class Study:
         placed = self.placement(p, mode)
         if placed is not None:
             qoi.update(placed.qoi())
-        if mode == "coupled" and p.get("zone.grow") and getattr(self, "growth", None) is not None:
+        if mode == "coupled" and p.get("zone.grow") and self.growth is not None:
             qoi.update(self.growth.qoi())
             history.update(self.growth.history())  # saved with the history
         if self.reference_elements:
