@@ -40,7 +40,7 @@ from scipy.spatial import cKDTree
 from ..params import CaseError
 from ..simulation import energy_scale
 from .fields import FemIndices
-from .placement import grown_reach
+from .placement import criteria, grown_reach
 
 
 def matches(a: np.ndarray, b: np.ndarray, tol: float) -> np.ndarray:
@@ -125,8 +125,7 @@ class Growth:
         sim.energies = lambda: {k: v + self.offset.get(k, 0.0) for k, v in energies().items()}
         region = built.dyn.region
         self._indices = FemIndices(region, built.lam, built.dim)
-        self._criteria = (["Hoffman"] if self.p["zone.ply_failure"] else []) + \
-            (["interlaminar"] if built.fem_pairs is None or len(built.fem_pairs) == 0 else [])
+        self._criteria = criteria(self.p, built)
         X = region.X[region.mesh.t.T][:, :, 0]
         self._x0, self._x1 = X.min(axis=1), X.max(axis=1)
 

@@ -69,6 +69,14 @@ class Estimate:
     wall: float
 
 
+def criteria(p: dict, built) -> list[str]:
+    """The failure indices that put an element in the zone: Hoffman's when the zone's plies
+    fail, Hashin's interlaminar when the far-field plies are tied (a cohesive far field
+    delaminates by itself)."""
+    return (["Hoffman"] if p["zone.ply_failure"] else []) + \
+        (["interlaminar"] if built.fem_pairs is None or len(built.fem_pairs) == 0 else [])
+
+
 def estimate(study, p: dict) -> tuple[Estimate, float, float, float]:
     """(Estimate, particle size d, half span L, laminate thickness H; m) of ``p``'s all-FEM
     run (a beam or beam_3d study) over the run's duration."""
@@ -83,9 +91,7 @@ def estimate(study, p: dict) -> tuple[Estimate, float, float, float]:
     sim, built = beam(study, q, "fem", "")
     dyn, region = built.dyn, built.dyn.region
     indices = FemIndices(region, built.lam, built.dim)
-    criteria = (["Hoffman"] if p["zone.ply_failure"] else []) + \
-        (["interlaminar"] if built.fem_pairs is None or len(built.fem_pairs) == 0 else [])
-    peaks = {c: np.zeros(region.n_elements) for c in criteria}
+    peaks = {c: np.zeros(region.n_elements) for c in criteria(p, built)}
     contact = [0.0]
 
     def track() -> float:
@@ -121,20 +127,20 @@ def decide(est: Estimate, d: float, L: float, grow_at: float, margin: float, pun
     from it whose index reaches ``grow_at``, plus ``margin`` (m), in whole particle spacings
     d (m). Refused (CaseError) when that is not below 0.8 L (the half span, m);
     ``far_field``: the setting that lets a tied far field delaminate, named in the refusal."""
-    criteria = list(est.peaks)
-    index = np.max([est.peaks[c] for c in criteria], axis=0) if criteria else np.zeros(len(est.x0))
+    flagged_by = list(est.peaks)
+    index = np.max([est.peaks[c] for c in flagged_by], axis=0) if flagged_by else np.zeros(len(est.x0))
     flagged = index >= grow_at
     start = max(est.contact, punch)
     reach = grown_reach(est.x0[flagged], est.x1[flagged], start, margin)
     w = max(np.ceil((reach + margin) / d - 1e-9), np.ceil((punch + 2 * d) / d - 1e-9), 3) * d
     if not w < 0.8 * L:
         allowed = f"allowed at most 0.8 x half the span ({0.8 * L * 1e3:.3g} mm)"
-        if reach <= start or not criteria:  # the patch (or punch) and the margin alone
+        if reach <= start or not flagged_by:  # the patch (or punch) and the margin alone
             raise CaseError(f"zone.placement = 'auto': the contact patch ({start * 1e3:.3g} mm) and the margin "
                             f"({margin * 1e3:.3g} mm) make the zone {w * 1e3:.3g} mm; {allowed}: a smaller "
                             "zone.margin, or --mode dem")
         near = flagged & (est.x0 <= reach)
-        which = max(criteria, key=lambda c: est.peaks[c][near].max(initial=0.0))
+        which = max(flagged_by, key=lambda c: est.peaks[c][near].max(initial=0.0))
         raise CaseError(
             f"zone.placement = 'auto': the all-FEM estimate puts the {which} index at {grow_at:g} or more from the "
             f"impact out to x = {reach * 1e3:.3g} mm, so the zone would be {w * 1e3:.3g} mm; {allowed}: raise "
@@ -142,7 +148,7 @@ def decide(est: Estimate, d: float, L: float, grow_at: float, margin: float, pun
             + (f", or let the far field delaminate ({far_field})" if far_field and which == "interlaminar" else ""))
     out = flagged & (est.x1 > w + 1e-9 * L)
     warnings = []
-    for c in criteria:
+    for c in flagged_by:
         beyond = out & (est.peaks[c] >= grow_at)
         if beyond.any():
             k = np.flatnonzero(beyond)[np.argmax(est.peaks[c][beyond])]
