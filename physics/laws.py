@@ -85,6 +85,23 @@ class HashinCohesiveLaw:
         ts = ((1 - d) * self.K)[:, None] * ds
         return tn, ts, d
 
+    def softening(self, damage: np.ndarray, dn: np.ndarray, slip: np.ndarray) -> np.ndarray:
+        """(n,) how far along its softening branch each bond is: (m - m0) / (mf - m0) at the
+        largest equivalent separation m that gave ``damage`` (n,), 0 elastic, 1 decohered,
+        under the mode mix of opening dn (n,) m and slip magnitude (n,) m. A state two laws of
+        the same strengths and toughness share whatever their stiffness: the same residual
+        strength (1 - s) K m0 and the same inelastic opening s mf (K m0 and mf do not depend on
+        K), so a bond's state carries onto another stiffness by this, not by its damage."""
+        m0, mf, _ = self.onset_and_final(np.asarray(dn, float), np.asarray(slip, float))
+        d = np.clip(damage, 0.0, 1.0)
+        return d * m0 / ((1 - d) * mf + d * m0)  # from d = mf (m - m0) / (m (mf - m0))
+
+    def damage_at(self, softening: np.ndarray, dn: np.ndarray, slip: np.ndarray) -> np.ndarray:
+        """(n,) the damage at softening fraction ``softening`` (n,) (the inverse of ``softening``)."""
+        m0, mf, _ = self.onset_and_final(np.asarray(dn, float), np.asarray(slip, float))
+        s = np.clip(softening, 0.0, 1.0)
+        return mf * s / (m0 + s * (mf - m0))
+
     def failed(self, damage: np.ndarray) -> np.ndarray:
         return np.asarray(damage) >= 1.0
 

@@ -170,14 +170,27 @@ def test_a_zone_grows_anywhere_in_the_beam_s_ranges_on_every_engine(femdem, tmp_
 
 
 @pytest.mark.slow
-def test_a_conversion_over_a_delaminating_far_field_warns(femdem):
-    """The full seed beam from a 0.6 mm zone (about 50 s): the zone grows over far-field
-    cohesive pairs that are softening, whose state maps onto the particle bonds only
-    approximately (docs/status.md): the run says so instead of a quiet answer."""
-    code, s, err = femdem("run", "beam_impact", "--dem", "liggghts", "--set=zone.grow=true",
-                          "--set=zone.half_width=0.6e-3")
+def test_a_zone_grown_over_a_delaminating_far_field_carries_its_softening(femdem, tmp_path):
+    """The full seed beam from a 0.6 mm zone (about 50 s each run): the zone grows over far-field
+    cohesive pairs that are softening; each pair's softening state carries onto the particle
+    bonds (HashinCohesiveLaw.softening), so the conversions keep the stored energy (below 1e-3
+    of the total; 3.7e-2 when the damage value was carried and the delamination was lost), and
+    the beam delaminates as the final zone fixed from t = 0 on the same far-field mesh does
+    (growth off: grow_at above any index, no margin): the total debonded length within 5 % (the
+    two 0/90 interfaces are a near tie, which one runs is not asserted) and the peak deflection
+    within 2 %."""
+    grown = ("--set=zone.grow=true", "--set=zone.half_width=0.6e-3")
+    code, s, err = femdem("run", "beam_impact", "--dem", "liggghts", *grown)
     assert code == 0, err
-    jumps = s["qoi"]["zone_conversion_energy_jump"]
-    warned = [w for w in s["warnings"] if "changed the stored energy" in w]
-    assert (jumps > 1e-2) == bool(warned), (jumps, s["warnings"])
-    assert warned and "delaminating" in warned[0]
+    q = s["qoi"]
+    assert q["zone_conversions"] >= 2 and q["zone_conversion_energy_jump"] < 1e-3
+    assert not [w for w in s["warnings"] if "changed the stored energy" in w]
+    w = q["zone_grown_half_width"]
+    code, f, err = femdem("run", "beam_impact", "--dem", "liggghts", "--set=zone.grow=true", f"--set=zone.half_width={w}",
+                          "--set=zone.grow_at=2", "--set=zone.margin=1e-9")
+    assert code == 0, err
+    assert f["qoi"]["zone_conversions"] == 0
+    debonded = lambda q: q["delamination_length_0"] + q["delamination_length_1"]
+    assert debonded(f["qoi"]) > 0.25 * 50e-3  # the fixed zone's beam delaminates (over more than a quarter of its span)
+    assert debonded(q) == pytest.approx(debonded(f["qoi"]), rel=0.05)
+    assert q["peak_centre_displacement"] == pytest.approx(f["qoi"]["peak_centre_displacement"], rel=0.02)

@@ -55,6 +55,35 @@ def test_mixed_mode_dissipation_and_initiation(beta, Z0, R0, GIc, ratio, mode):
     assert (peak[0] / Z0) ** 2 + (peak[1] / R0) ** 2 == pytest.approx(1.0, rel=5e-3)
 
 
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.data_too_large])
+@given(beta=st.floats(0.0, 10.0), f=st.floats(0.0, 0.99), ratio=st.floats(0.02, 1.0), Z0=st.floats(10e6, 100e6),
+       R0=st.floats(10e6, 100e6), GIc=st.floats(300.0, 2000.0), mode=st.sampled_from(["bk", "power"]))
+def test_a_softening_state_carries_onto_another_stiffness(beta, f, ratio, Z0, R0, GIc, mode):
+    """A bond loaded a fraction f of the way from onset to full decohesion, carried onto a
+    law of the same strengths and toughness but another penalty (a cohesive node pair's state
+    onto a particle bond, study/growth.py): reloaded from closed, the new bond peaks at (1 - f)
+    of the mode mix's onset traction and dissipates (1 - f) Gc(B) on its way to decohesion."""
+    stiff = HashinCohesiveLaw(K=1e15, Z0=Z0, R0=R0, GIc=GIc, GIIc=1.5 * GIc, mixed_mode=mode)
+    soft = HashinCohesiveLaw(K=ratio * 1e15, Z0=Z0, R0=R0, GIc=GIc, GIIc=1.5 * GIc, mixed_mode=mode)
+    a, b = 1.0, beta
+    one = lambda x: np.array([x])
+    m0, mf, B = (float(x[0]) for x in stiff.onset_and_final(one(a), one(b)))
+    m = m0 + f * (mf - m0)
+    _, _, d = stiff.tractions(one(a * m / np.hypot(a, b)), one(b * m / np.hypot(a, b))[:, None], np.zeros(1))
+    s = stiff.softening(d, one(a), one(b))
+    assert s[0] == pytest.approx(f, abs=1e-9)
+    d_soft = soft.damage_at(s, one(a), one(b))
+    assert soft.softening(d_soft, one(a), one(b))[0] == pytest.approx(f, abs=1e-9)
+    n = 20001  # reload the soft bond from closed along the same mix (monotonic: one call, each point from d_soft)
+    m0s, mfs, _ = (float(x[0]) for x in soft.onset_and_final(one(a), one(b)))
+    path = np.linspace(0.0, 1.05 * mfs, n) / np.hypot(a, b)
+    tn, ts, dd = soft.tractions(a * path, (b * path)[:, None], np.full(n, d_soft[0]))
+    work = float(np.sum(0.5 * ((tn[1:] + tn[:-1]) * a + (ts[1:, 0] + ts[:-1, 0]) * b) * np.diff(path)))
+    assert dd[-1] == 1.0
+    assert work == pytest.approx((1 - f) * float(soft.toughness(B)), rel=2e-3, abs=1e-3 * GIc)
+    assert np.hypot(tn, ts[:, 0]).max() == pytest.approx((1 - f) * stiff.K * m0, rel=2e-3, abs=1e-3 * Z0)
+
+
 def test_bk_limits_and_compression():
     assert AS4.toughness(0.0) == pytest.approx(969.0) and AS4.toughness(1.0) == pytest.approx(1719.0)
     # compression: the normal penalty stays, no damage from pressure alone
