@@ -14,18 +14,26 @@ from typing import Callable
 import numpy as np
 
 from .bulk_viscosity import BulkViscosity
+from .kernels import kinetic_energy as nodal_kinetic_energy
 from physics.impactor import RigidImpactor
+from physics.kernels import ball_on_nodes
 from .region import FemRegion
 
 TimeFunction = Callable[[float], float]
 
 
+def at_rest(t: float) -> float:
+    """The velocity of a fixed or symmetry support (m/s): zero at any time."""
+    return 0.0
+
+
 @dataclass
 class PrescribedMotion:
-    """Velocity v(t) (m/s) on flat DOFs ``dofs``; v(t) = 0 is a fixed / symmetry support."""
+    """Velocity v(t) (m/s) on flat DOFs ``dofs``; v(t) = 0 (at_rest, the default) is a fixed /
+    symmetry support."""
 
     dofs: np.ndarray
-    velocity: TimeFunction = staticmethod(lambda t: 0.0)
+    velocity: TimeFunction = at_rest
 
 
 def displacement_history(d: TimeFunction, h: float = 1e-9) -> TimeFunction:
@@ -115,6 +123,20 @@ class ExplicitDynamics:
         self._contact_energy = 0.0  # stored penalty energy (J)
         self._reaction_prev = np.zeros(self._prescribed.size)
         self._ke_prev = 0.0
+        # the step's buffers, rewritten in place (the step allocates little: on small meshes a
+        # step is ruled by the count of numpy operations, not their size)
+        self._du, self._f_int = zero.copy(), zero.copy()
+        self._a_rest = np.zeros(self._prescribed.size)  # the prescribed DOFs' acceleration when none moves
+        self._moving = [sup for sup in self.supports if sup.velocity is not at_rest]
+        rest = [sup.dofs for sup in self.supports if sup.velocity is at_rest]
+        rest = np.unique(np.concatenate(rest)) if rest else np.zeros(0, int)
+        # the fixed DOFs set in one operation, then the moving supports in their order (the same
+        # as the supports' order unless a DOF is both fixed and moving: then each in turn)
+        overlap = any(np.isin(sup.dofs, rest).any() for sup in self._moving)
+        self._rest_dofs = None if overlap else rest
+        self._contact_buffers = [tuple((np.zeros((len(self._surface), r.dim)), np.zeros(r.dim)) for _ in range(2))
+                                 for _ in self.impactors]
+        self._xs, self._vs = np.zeros((len(self._surface), r.dim)), np.zeros((len(self._surface), r.dim))
 
     def add_nodal_mass(self, extra: np.ndarray) -> None:
         """Add (n_nodes,) kg at the nodes (interface particle masses shared by a tie)."""
@@ -155,12 +177,20 @@ class ExplicitDynamics:
         s = self.state
         for imp in self.impactors:
             imp.x += dt * imp.v
-        vflat = s.v.reshape(-1)
-        t_half = s.t + 0.5 * dt
-        for sup in self.supports:
-            vflat[sup.dofs] = sup.velocity(t_half)
+        self._set_prescribed_velocities(s.t + 0.5 * dt)
         s.u += dt * s.v
         s.t += dt
+
+    def _set_prescribed_velocities(self, t: float) -> None:
+        """The supports' velocities at time t (s) on their DOFs."""
+        vflat = self.state.v.reshape(-1)
+        if self._rest_dofs is None:
+            for sup in self.supports:
+                vflat[sup.dofs] = sup.velocity(t)
+            return
+        vflat[self._rest_dofs] = 0.0
+        for sup in self._moving:
+            vflat[sup.dofs] = sup.velocity(t)
 
     def kick_drift(self, dt: float) -> None:
         """v_{n+1/2} = v_n + dt/2 a_n, then u_{n+1} = u_n + dt v_{n+1/2}."""
@@ -171,19 +201,24 @@ class ExplicitDynamics:
     def compute_forces(self) -> None:
         """Forces at the new configuration; a = f / m except on prescribed DOFs."""
         s, L = self.state, self.ledger
-        f_ext = self.external_force(s.t)
-        f_int = self.region.internal_force(s.u)
-        f_damp = self._damping_force(s.v)
-        du = s.u - self._u_at_forces  # motion since the last force evaluation
+        f_int = self.region.internal_force(s.u, out=self._f_int)
+        du = np.subtract(s.u, self._u_at_forces, out=self._du)  # motion since the last force evaluation
         self._dt = s.t - self._t_at_forces
-        L.external_work += 0.5 * float(np.vdot(s.f_ext + f_ext, du))
-        L.damping += float(np.vdot(f_damp, du))
-        f = f_ext - f_int - f_damp
+        if self.loads:
+            f_ext = self.external_force(s.t)
+            L.external_work += 0.5 * float(np.vdot(s.f_ext + f_ext, du))
+            f = f_ext - f_int
+        else:  # nothing applied: no work; s.f_ext stays zero
+            f_ext, f = s.f_ext, np.negative(f_int)
+        f_damp = self._damping_force(s.v)
+        if f_damp is not None:
+            L.damping += float(np.vdot(f_damp, du))
+            f -= f_damp
         if self.impactors:
-            f += self._contact(du)
+            self._contact(du, f)
         for model in self.node_forces:
             f += model()[:, : self.region.dim]
-        a = f / self.m[:, None]
+        a = np.divide(f, self.m[:, None], out=s.a)
         if self._prescribed.size:
             # the support supplies what the prescribed path needs beyond the residual force
             a_pres = self._prescribed_acceleration()
@@ -193,39 +228,49 @@ class ExplicitDynamics:
             L.support_work += 0.5 * float(np.vdot(self._reaction_prev + reaction, du.reshape(-1)[self._prescribed]))
             self._reaction_prev = reaction
             a.reshape(-1)[self._prescribed] = a_pres
-        s.a, s.f_ext = a, f_ext
+        s.f_ext = f_ext
         self.f_int = f_int
-        self._u_at_forces, self._t_at_forces = s.u.copy(), s.t  # the ledger's time level
+        np.copyto(self._u_at_forces, s.u)  # the ledger's time level
+        self._t_at_forces = s.t
 
     def reaction(self, dofs: np.ndarray) -> float:
         """N, sum of the support reactions on flat DOFs ``dofs`` (all prescribed) at the last
         force evaluation: what the supports apply beyond the residual force."""
         return float(self._reaction_prev[np.isin(self._prescribed, dofs)].sum())
 
-    def _contact(self, du: np.ndarray) -> np.ndarray:
-        """Penalty contact forces on the surface nodes; impactor accelerations; contact ledger."""
-        S, r = self._surface, self.region
-        f = np.zeros((r.n_nodes, r.dim))
+    def _contact(self, du: np.ndarray, f: np.ndarray) -> None:
+        """Penalty contact forces on the surface nodes, added to f (n_nodes, dim) N; impactor
+        accelerations; contact ledger. du (n_nodes, dim) m: the nodes' motion since the last."""
+        S, r, s = self._surface, self.region, self.state
         self._contact_energy = 0.0
         for k, imp in enumerate(self.impactors):
-            fc, energy = imp.forces(r.X[S] + self.state.u[S], self.state.v[S])
-            F = -fc.sum(axis=0)
             fc_prev, F_prev = self._contact_prev[k]
+            if imp.ball:  # one compiled pass, into the buffer the last step's forces are not in
+                a, b = self._contact_buffers[k]
+                fc, F = b if fc_prev is a[0] else a
+                pen2, work = ball_on_nodes(r.X, s.u, s.v, du, S, self._xs, self._vs, imp.x, imp.v, float(imp.radius),
+                                           float(imp.penalty), float(imp.friction), float(imp.slip_velocity**2),
+                                           fc, fc_prev, f, F)
+                energy = 0.5 * imp.penalty * pen2
+            else:
+                fc, energy = imp.forces(r.X[S] + s.u[S], s.v[S])
+                F = -fc.sum(axis=0)
+                work = float(np.vdot(fc_prev + fc, du[S]))
+                f[S] += fc
             dx, imp.x_at_forces = imp.x - imp.x_at_forces, imp.x.copy()
-            self._contact_work += 0.5 * float(np.vdot(fc_prev + fc, du[S]) + (F_prev + F) @ dx)
+            self._contact_work += 0.5 * (work + (F_prev + F) @ dx)
             self._contact_prev[k] = (fc, F)
             imp.a = F / imp.mass
-            f[S] += fc
             self._contact_energy += energy
-        return f
 
     def _prescribed_acceleration(self) -> np.ndarray:
         """Acceleration of the prescribed DOFs at t_n: central difference of v(t) over dt."""
         t, dt = self.state.t, getattr(self, "_dt", 0.0)
+        if not self._moving or dt <= 0:
+            return self._a_rest
         a = np.zeros(self.region.ndof)
-        if dt > 0:
-            for sup in self.supports:
-                a[sup.dofs] = (sup.velocity(t + 0.5 * dt) - sup.velocity(t - 0.5 * dt)) / dt
+        for sup in self.supports:
+            a[sup.dofs] = (sup.velocity(t + 0.5 * dt) - sup.velocity(t - 0.5 * dt)) / dt
         return a[self._prescribed]
 
     def kick(self, dt: float) -> None:
@@ -233,9 +278,7 @@ class ExplicitDynamics:
         s = self.state
         self.half_kick(dt)
         if self._prescribed.size:
-            vflat = s.v.reshape(-1)
-            for sup in self.supports:
-                vflat[sup.dofs] = sup.velocity(s.t)
+            self._set_prescribed_velocities(s.t)
         ke = self.kinetic_energy()
         if self.kinetic_damping and ke < self._ke_prev:
             s.v[:] = 0.0  # past a kinetic-energy peak: restart from rest (dynamic relaxation)
@@ -290,8 +333,7 @@ class ExplicitDynamics:
 
     # -- energies ----------------------------------------------------------------------------
     def kinetic_energy(self) -> float:
-        return (0.5 * float(np.einsum("n,ni,ni->", self.m, self.state.v, self.state.v))
-                + sum(imp.kinetic_energy() for imp in self.impactors))
+        return nodal_kinetic_energy(self.m, self.state.v) + sum(imp.kinetic_energy() for imp in self.impactors)
 
     def momentum(self) -> np.ndarray:
         """(dim,) kg m/s of the FEM nodes and the impactors."""
@@ -308,7 +350,9 @@ class ExplicitDynamics:
         return dict(kinetic=L.kinetic, internal=L.internal + self._contact_energy,
                     external_work=L.external_work + L.support_work, dissipated=L.damping + contact_loss)
 
-    def _damping_force(self, v: np.ndarray) -> np.ndarray:
+    def _damping_force(self, v: np.ndarray) -> np.ndarray | None:
+        """(n_nodes, dim) N of Rayleigh damping, viscous hourglass control and bulk viscosity at
+        velocity v, or None without any."""
         f = 0.0
         if self.alpha:
             f = self.alpha * self.m[:, None] * v
@@ -319,4 +363,4 @@ class ExplicitDynamics:
             f = f + hg
         if self.bulk_viscosity is not None:
             f = f + self.bulk_viscosity.force(v)
-        return f if isinstance(f, np.ndarray) else np.zeros_like(v)
+        return f if isinstance(f, np.ndarray) else None

@@ -1,4 +1,4 @@
-"""Per-step element loops compiled with numba (the Total Lagrangian internal force).
+"""Per-step loops compiled with numba (the Total Lagrangian internal force, the kinetic energy).
 
 numpy einsum on (nel, nqp, nloc, dim) arrays spends most of its time in temporaries; this
 loop visits each quadrature point once and accumulates nodal forces in place.
@@ -186,3 +186,15 @@ def respa_kicks(v, a, f_tie, band, m, dt, dt_fast, slow, kick, f_fast, a_slow):
                     v[i, k] += dt * s
             if kick:
                 v[i, k] += dt_fast * ff / m[i]
+
+
+@kernel
+def kinetic_energy(m, v):
+    """J: sum_n m_n |v_n|^2 / 2 over nodes n; m (n,) kg, v (n, dim) m/s."""
+    e = 0.0
+    for i in range(v.shape[0]):
+        w = 0.0
+        for k in range(v.shape[1]):
+            w += v[i, k] * v[i, k]
+        e += m[i] * w
+    return 0.5 * e

@@ -196,11 +196,15 @@ class FemRegion:
                             minlength=self.n_nodes)
         return f, added
 
-    def internal_force(self, u: np.ndarray) -> np.ndarray:
-        """u: (n_nodes, dim) m -> internal nodal force (n_nodes, dim) N."""
+    def internal_force(self, u: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+        """u: (n_nodes, dim) m -> internal nodal force (n_nodes, dim) N: the linear form's sparse
+        product (scipy's: a numba loop of the same sums in the same order took 1.8 x as long),
+        the Total Lagrangian form's into ``out`` if given."""
         if self.formulation == "linear":
             return (self.K @ u.ravel()).reshape(u.shape)
-        f = np.zeros_like(u, dtype=float)
+        f = np.zeros(np.shape(u)) if out is None else out
+        if out is not None:
+            f[:] = 0.0
         voigt = VOIGT_2D if self.dim == 2 else VOIGT_3D
         for q, Dq in zip(self.rules, self._D_rules):
             total_lagrangian_force(np.ascontiguousarray(u, dtype=float), self._conn, q.dN, q.dx, Dq, voigt, f)

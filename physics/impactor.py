@@ -63,6 +63,11 @@ class RigidImpactor:
             self.depth = self.depth or self.radius
         self._k = None  # the footprint on the contact nodes, in the order forces() receives them
 
+    @property
+    def ball(self) -> bool:
+        """A sphere, or a cylinder seen in its cross-section (2D, no axis): contact with a ball."""
+        return self.shape == "sphere" or (self.shape == "cylinder" and self.axis is None)
+
     def restrict(self, nodes: np.ndarray) -> None:
         """The contact nodes' indices (m,) in the order ``forces`` receives them (the footprint's
         share of each)."""
@@ -105,7 +110,7 @@ class RigidImpactor:
     def forces(self, x: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, float]:
         """Nodal contact forces (m, dim) N for positions x and velocities v (m, dim); and the
         stored penalty energy (J)."""
-        if self.shape == "sphere" or (self.shape == "cylinder" and self.axis is None):  # a ball: compiled
+        if self.ball:  # compiled
             f = np.empty((len(x), x.shape[1]))
             pen2 = ball_contact(np.ascontiguousarray(x, float), np.ascontiguousarray(v, float), self.x, self.v,
                                 float(self.radius), float(self.penalty), float(self.friction),

@@ -233,6 +233,32 @@ def ball_contact(x, v, centre, velocity, radius, penalty, friction, slip2, f):
 
 
 @kernel
+def ball_on_nodes(X, u, v, du, S, xs, vs, centre, velocity, radius, penalty, friction, slip2, fc, fc_prev, f, F):
+    """A rigid ball on FEM surface nodes S (m,) in one pass: ball_contact on the positions
+    X + u (n, dim) m and velocities v (n, dim) m/s of the nodes S (gathered into the scratch
+    xs, vs (m, dim)); its forces into fc (m, dim) N and added to f[S] (f (n, dim) N); F (dim,)
+    N out, the force on the ball (minus the sum of fc). Returns (sum of squared penetrations
+    m^2, sum over the nodes of (fc_prev + fc) . du[S] J, du (n, dim) m the nodes' motion)."""
+    m, dim = xs.shape
+    for r in range(m):
+        p = S[r]
+        for i in range(dim):
+            xs[r, i] = X[p, i] + u[p, i]
+            vs[r, i] = v[p, i]
+    pen2 = ball_contact(xs, vs, centre, velocity, radius, penalty, friction, slip2, fc)
+    work = 0.0
+    for i in range(dim):
+        F[i] = 0.0
+    for r in range(m):
+        p = S[r]
+        for i in range(dim):
+            f[p, i] += fc[r, i]
+            work += (fc_prev[r, i] + fc[r, i]) * du[p, i]
+            F[i] -= fc[r, i]
+    return pen2, work
+
+
+@kernel
 def ball_on_particles(X, Fout, rows, x, f, x_prev, f_prev, started, dt, centre, velocity, radius, penalty,
                       friction, slip2, F):
     """One step of a rigid ball on particles, in place on an engine's arrays: ball_contact on

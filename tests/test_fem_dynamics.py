@@ -59,6 +59,52 @@ def test_impactor_conserves_momentum(dim, shape, friction):
     assert e["dissipated"] > -0.01 * e0, "contact must not create energy"
 
 
+class _GapBall(RigidImpactor):
+    ball = False  # the readable gap form on gathered nodes, not the compiled pass
+
+
+@pytest.mark.parametrize("dim, shape, friction", [(2, "cylinder", 0.3), (3, "sphere", 0.2)])
+def test_compiled_ball_on_the_surface_is_the_gathered_gap_form(dim, shape, friction):
+    """The ball's one-pass contact on the FEM's surface nodes (kernels.ball_on_nodes) steps the
+    block as the gap form on the gathered nodes does: nodes, impactor and contact ledger equal
+    to round-off over an oblique impact with friction (the force on the ball and the work are
+    summed in another order)."""
+    runs = []
+    for kind in (RigidImpactor, _GapBall):
+        c = np.array([0.05, 0.06] if dim == 2 else [0.05, 0.05, 0.06])
+        v = np.zeros(dim)
+        v[0], v[dim - 1] = 3.0, -20.0
+        imp = kind(shape, c, 0.0099, 0.05, v, penalty=5e7, friction=friction)
+        dyn = ExplicitDynamics(_block(dim), impactors=[imp])
+        _run(dyn, 300, safety=0.5)
+        assert np.abs(imp.v - v).max() > 0.5  # it hit
+        runs.append((dyn, imp))
+    (a, ia), (b, ib) = runs
+    scale = np.abs(b.state.u).max()
+    assert np.abs(a.state.u - b.state.u).max() <= 1e-9 * scale
+    assert np.abs(ia.v - ib.v).max() <= 1e-9 * np.abs(ib.v).max()
+    for k in ("kinetic", "internal", "dissipated"):
+        assert a.energies()[k] == pytest.approx(b.energies()[k], rel=1e-8, abs=1e-12)
+
+
+def test_fixed_and_moving_supports_set_their_velocities_in_order():
+    """The fixed supports' DOFs are set in one operation, then the moving ones: the same
+    velocities as setting every support in its order, also when a DOF is both fixed and moving
+    (then each is set in turn: the last support's wins)."""
+    r = _block(2)
+    n = r.n_nodes
+    left, right = np.arange(0, 2 * n, 14), np.arange(1, 2 * n, 10)
+    for supports in ([PrescribedMotion(left), PrescribedMotion(right, lambda t: 2.0 * t)],
+                     [PrescribedMotion(right, lambda t: 2.0 * t), PrescribedMotion(np.union1d(left, right[:3]))]):
+        dyn = ExplicitDynamics(r, supports=supports)
+        dyn.state.v[:] = 7.0
+        dyn._set_prescribed_velocities(0.5)
+        ref = np.full(2 * n, 7.0)
+        for sup in supports:
+            ref[sup.dofs] = sup.velocity(0.5)
+        np.testing.assert_array_equal(dyn.state.v.reshape(-1), ref)
+
+
 def test_penalty_enters_stable_step():
     r = _block()
     soft = ExplicitDynamics(r, impactors=[RigidImpactor("cylinder", [0.05, 0.07], 0.01, 1.0, [0, -1], penalty=1e3)])
