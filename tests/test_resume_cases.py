@@ -109,8 +109,8 @@ def test_models_hosted_in_the_lammps_worker_resume_bit_for_bit(tmp_path):
     """The law bonds and the impactor run inside the LAMMPS worker; a checkpoint takes their
     state from there and a resume puts it back: killed after the first checkpoint, resumed,
     the coarse beam's impact equals the uninterrupted run to the bit."""
-    args = ["run", "beam_impact_coarse", "--dem", "lammps", "--set", "clock.t_end=4e-5",
-            "--set", "output.checkpoint_every=1000"]
+    args = ["run", "beam_impact_coarse", "--dem", "lammps", "--set", "clock.t_end=2.4e-5",
+            "--set", "output.checkpoint_every=600"]  # about 1,660 steps: the impactor in contact from the start
     assert (r := _femdem(tmp_path, *args, "--out", "straight")).returncode == 0, r.stderr
     proc = _femdem(tmp_path, *args, "--out", "killed", wait=False)
     assert _kill_when(proc, lambda: (tmp_path / "killed.partial" / "checkpoint" / "state.h5").exists())
