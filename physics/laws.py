@@ -85,22 +85,19 @@ class HashinCohesiveLaw:
         ts = ((1 - d) * self.K)[:, None] * ds
         return tn, ts, d
 
-    def softening(self, damage: np.ndarray, dn: np.ndarray, slip: np.ndarray) -> np.ndarray:
-        """(n,) how far along its softening branch each bond is: (m - m0) / (mf - m0) at the
-        largest equivalent separation m that gave ``damage`` (n,), 0 elastic, 1 decohered,
-        under the mode mix of opening dn (n,) m and slip magnitude (n,) m. A state two laws of
-        the same strengths and toughness share whatever their stiffness: the same residual
-        strength (1 - s) K m0 and the same inelastic opening s mf (K m0 and mf do not depend on
-        K), so a bond's state carries onto another stiffness by this, not by its damage."""
-        m0, mf, _ = self.onset_and_final(np.asarray(dn, float), np.asarray(slip, float))
-        d = np.clip(damage, 0.0, 1.0)
-        return d * m0 / ((1 - d) * mf + d * m0)  # from d = mf (m - m0) / (m (mf - m0))
-
-    def damage_at(self, softening: np.ndarray, dn: np.ndarray, slip: np.ndarray) -> np.ndarray:
-        """(n,) the damage at softening fraction ``softening`` (n,) (the inverse of ``softening``)."""
-        m0, mf, _ = self.onset_and_final(np.asarray(dn, float), np.asarray(slip, float))
-        s = np.clip(softening, 0.0, 1.0)
-        return mf * s / (m0 + s * (mf - m0))
+    def damage_on(self, other: "HashinCohesiveLaw", damage: np.ndarray) -> np.ndarray:
+        """(n,) the damage of bonds of law ``other`` (the same strengths and toughness, another
+        penalty K') at the point of their softening where bonds of this law are at ``damage``
+        (n,): the same fraction s of the way from onset to decohesion, so the same residual
+        strength (1 - s) K m0 and inelastic opening s mf (neither depends on K: m0 ~ 1 / K, and
+        mf = 2 Gc / (K m0)). From d = mf (m - m0) / (m (mf - m0)), s = d m0 / ((1 - d) mf + d m0),
+        which gives d' = d K' / (d K' + (1 - d) K) under any mode mix. A bond's state carries onto
+        another stiffness by this, not by its damage value."""
+        if (self.Z0, self.R0, self.GIc, self.GIIc, self.eta, self.mixed_mode) != \
+                (other.Z0, other.R0, other.GIc, other.GIIc, other.eta, other.mixed_mode):
+            raise ValueError("damage_on: the two laws differ in more than their penalty")
+        d = np.clip(np.asarray(damage, float), 0.0, 1.0)
+        return d * other.K / (d * other.K + (1.0 - d) * self.K)
 
     def failed(self, damage: np.ndarray) -> np.ndarray:
         return np.asarray(damage) >= 1.0

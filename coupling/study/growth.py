@@ -19,7 +19,7 @@ far field is the old mesh less the columns that became particles. What carries o
   now), take the FEM's displacement and velocity at their place (the old elements' shape
   functions); their bonds' rest lengths are the lattice's, so they carry the elements'
   strain. An interlaminar bond where the far field had a cohesive node pair takes its softening
-  state (the same fraction of the way from onset to decohesion: HashinCohesiveLaw.softening).
+  state (the same fraction of the way from onset to decohesion: HashinCohesiveLaw.damage_on).
 - Impactors: their state; the particles they may touch get their last contact state.
 - Momentum: the converted particles' velocities are shifted by one common vector so that the
   total momentum equals the old model's at that step (to round-off). The energy that changes
@@ -368,7 +368,7 @@ class _Transfer:
 
     def _inter_from_node_pairs(self, inter, rows: np.ndarray) -> None:
         """Interlaminar bonds new to the particles take the softening state of the cohesive
-        node pair at their place (the far field delaminated there): HashinCohesiveLaw.softening."""
+        node pair at their place (the far field delaminated there): HashinCohesiveLaw.damage_on."""
         bonds = [m.bonds for m in self.old.dyn.node_forces if hasattr(m, "bonds")]
         fresh = np.flatnonzero(rows < 0)
         if not bonds or not fresh.size:
@@ -379,15 +379,12 @@ class _Transfer:
         src = matches(at, mid, 1e-6 * float(np.ptp(at[:, 0]) + 1e-3))
         at, src = fresh[src >= 0], src[src >= 0]
         pair = bonds[0]
-        # the same point of the softening branch (a fraction of the way from onset to
-        # decohesion under the pair's mode mix), not the same damage: the particle bond is softer
-        dn = np.einsum("bi,bi->b", pair.delta[src], pair.normal[src])
-        slip = np.linalg.norm(pair.delta[src] - dn[:, None] * pair.normal[src], axis=1)
-        s = pair.law.softening(pair.damage[src], dn, slip)
-        inter.damage[at] = np.where(pair.damage[src] >= 1.0, 1.0, inter.law.damage_at(s, dn, slip))
+        # the same point of the softening branch (the same fraction of the way from onset to
+        # decohesion), not the same damage: the particle bond is softer than the pair
+        inter.damage[at] = pair.law.damage_on(inter.law, pair.damage[src])
         inter.t_failed[at] = pair.t_failed[src]
         if len(at):
-            self.softening = f"delaminating (cohesive pairs up to {s.max():.2f} of the way to decohesion)"
+            self.softening = f"delaminating (cohesive pairs' damage up to {pair.damage[src].max():.2f})"
 
     @staticmethod
     def _carry_impactor(new, old, was: np.ndarray, x: np.ndarray) -> None:
