@@ -164,7 +164,7 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
         else:  # ring, then wait for the go, serving the queries the hook makes meanwhile
             state["hooks"] += 1
             bell.ring(HOOK, state["hooks"])
-            wait = Backoff()
+            wait = Backoff(bell=bell)
             while not bell.rung(GO, state["hooks"]):
                 if wait(conn.poll):
                     handle(conn.recv())
@@ -227,6 +227,8 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
             elif op == "doorbell":  # the per-step handshake in shared memory from now on (rank 0)
                 if conn.root:
                     state["bell"] = Doorbell(args[0])
+                    if args[1]:  # the wake-ups follow the message on the socket
+                        state["bell"].receive_wakeups(conn.conn.fileno())
                 conn.send(("ok",))
             elif op == "set_dt":
                 backend.set_dt(args[0])
@@ -258,7 +260,7 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
 
     def serve_one() -> bool:
         """The next advance rung on the doorbell (one rank) or message; False to stop."""
-        bell, wait = state["bell"], Backoff()
+        bell, wait = state["bell"], Backoff(bell=state["bell"])
         while bell is not None and conn.comm is None:
             if bell.rung(ADVANCE, state["advances"] + 1):
                 state["advances"] += 1

@@ -78,6 +78,51 @@ def test_a_long_wait_sleeps_instead_of_holding_a_core_and_a_message_ends_it():
     assert wait(a.poll) and time.perf_counter() - t0 < 1.0
 
 
+def test_with_wake_ups_a_long_wait_sleeps_until_rung_or_a_message_comes():
+    """Wake-ups (eventfds handed over a socket pair, as to a worker): a waiter rung after 0.3 s
+    used a small part of that time on its core and woke at once; one sleeping when a message
+    comes returns True."""
+    import socket
+    import threading
+    import time
+    from dem_region.doorbell import can_wake
+    if not can_wake():
+        pytest.skip("no eventfds here")
+    ours, theirs = socket.socketpair()
+    bell = Doorbell()
+    other = Doorbell(bell.name)
+    try:
+        bell.send_wakeups(ours.fileno())
+        other.receive_wakeups(theirs.fileno())
+        seen = {}
+
+        def waiter():
+            wait = Backoff(bell=other)
+            t0, c0 = time.perf_counter(), time.thread_time()
+            while not other.rung(ADVANCE, 1):
+                wait()
+            seen["woke"], seen["wall"], seen["cpu"] = time.perf_counter(), time.perf_counter() - t0, time.thread_time() - c0
+
+        thread = threading.Thread(target=waiter)
+        thread.start()
+        time.sleep(0.3)
+        rung_at = time.perf_counter()
+        bell.ring(ADVANCE, 1)
+        thread.join(timeout=5)
+        assert seen["wall"] >= 0.3 and seen["cpu"] < 0.2 * seen["wall"] and seen["woke"] - rung_at < 0.05
+        # asleep in the other direction, a message on the socket ends the wait
+        wait = Backoff(bell=bell, spin=0, patience=0.0)
+        theirs.send(b"x")
+        t0 = time.perf_counter()
+        while not wait(lambda timeout=0.0: False):
+            assert time.perf_counter() - t0 < 1.0
+    finally:
+        other.close()
+        bell.close()
+        ours.close()
+        theirs.close()
+
+
 def test_an_advance_that_fails_in_the_worker_is_reported_where_it_failed_and_the_next_one_runs(monkeypatch):
     """The worker's serve() against the orchestrator's RemoteBackend._run over a socket pair and
     the doorbell, with a made-up engine whose second step raises: the orchestrator raises the

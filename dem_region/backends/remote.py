@@ -23,7 +23,8 @@ from typing import Callable
 import numpy as np
 
 from .. import wire
-from ..doorbell import ADVANCE, ASK, DONE, DT, ENGINE_S, GO, HOOK, MODELS_S, STEPS, Backoff, Doorbell, available
+from ..doorbell import (ADVANCE, ASK, DONE, DT, ENGINE_S, GO, HOOK, MODELS_S, STEPS, Backoff, Doorbell, available,
+                        can_wake)
 from ..model_step import set_model_states
 from ..scene import DemScene
 from .base import EngineUnavailable
@@ -113,11 +114,15 @@ class RemoteBackend:
         except (EOFError, OSError):
             raise self._died() from None
 
-    def _call(self, *msg):
+    def _call(self, *msg, then=None):
+        """Send ``msg`` and return the worker's reply; ``then(socket fd)`` runs between (what
+        goes on the socket outside the messages: the doorbell's wake-ups)."""
         if self._models_pending:  # a query after the models' bulk write sees their forces applied
             self._models_pending = False
             self._call("models_flush")
         self._send(msg)
+        if then is not None:
+            then(self.conn.fileno())
         reply = self._recv()
         if reply[0] == "error":
             self._raise(reply)
@@ -185,9 +190,9 @@ class RemoteBackend:
     def _run(self, op: str, between: Callable[[], None] | None, n: int = 1) -> None:
         clock = time.perf_counter
         if self.bell is None and available():
-            self.bell = Doorbell()
-            self._call("doorbell", self.bell.name)
-        bell, wait = self.bell, Backoff()
+            self.bell, wake = Doorbell(), can_wake()
+            self._call("doorbell", self.bell.name, wake, then=self.bell.send_wakeups if wake else None)
+        bell, wait = self.bell, Backoff(bell=self.bell)
         t0, in_hook = clock(), 0.0
         rung = bell is not None and op == "advance" and self.ranks == 1  # (ranks: rank 0 forwards it)
         if rung:
