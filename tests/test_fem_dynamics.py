@@ -1,12 +1,11 @@
 """Explicit dynamics: impactors, damping options, mass scaling, loads (invariants and closed forms)."""
 import numpy as np
 import pytest
-import skfem
 
 from fem_region import loads, materials, mesh
 from fem_region.bulk_viscosity import BulkViscosity
 from fem_region.elements import ELEMENTS
-from fem_region.explicit import ExplicitDynamics, NodalLoad, PrescribedMotion
+from fem_region.explicit import ExplicitDynamics, PrescribedMotion
 from physics.impactor import RigidImpactor
 from fem_region.region import FemRegion
 
