@@ -53,8 +53,9 @@ class Backoff:
         self.bell = bell if bell is not None and bell.can_sleep else None
         # with wake-ups: yield this long before sleeping (a wake-up through this VM's kernel costs
         # more than a short wait; measured on the LAMMPS coarse beam: wall x 0.91 alone, x 0.88
-        # beside a busy process, CPU x 0.85, medians of 5 pairs against no sleeping)
-        self.patience = patience
+        # beside a busy process, CPU x 0.85, medians of 5 pairs against no sleeping; the
+        # environment's FEMDEM_PATIENCE (s) overrides it for such measurements: docs/benchmarks.md)
+        self.patience = float(os.environ.get("FEMDEM_PATIENCE", patience))
         self.rounds, self._since, self._drained = 0, None, False
 
     def reset(self) -> None:
