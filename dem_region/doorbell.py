@@ -39,6 +39,13 @@ HOOK, GO, ADVANCE, DONE = range(4)
 STEPS, ASK, DT, ENGINE_S, MODELS_S = range(5)
 
 
+# with wake-ups, a waiter yields this long (s) before it sleeps: a wake-up through this VM's kernel
+# costs more than a short wait (measured on the LAMMPS coarse beam: wall x 0.91 alone, x 0.88
+# beside a busy process, CPU x 0.85, medians of 5 pairs against never sleeping); the
+# environment's FEMDEM_PATIENCE overrides it for such measurements (docs/benchmarks.md)
+PATIENCE = float(os.environ.get("FEMDEM_PATIENCE", "3e-4"))
+
+
 class Backoff:
     """Wait politely for a counter, watching a socket too: spin ``spin`` rounds, then yield the
     core until ``yield_rounds`` (a few milliseconds), then wait in the socket's select for
@@ -48,14 +55,10 @@ class Backoff:
     message comes)."""
 
     def __init__(self, spin: int = 64, yield_rounds: int = 5000, longest: float = 2e-4, bell: "Doorbell | None" = None,
-                 patience: float = 3e-4):
+                 patience: float | None = None):
         self.spin, self.yield_rounds, self.longest = spin, yield_rounds, longest
         self.bell = bell if bell is not None and bell.can_sleep else None
-        # with wake-ups: yield this long before sleeping (a wake-up through this VM's kernel costs
-        # more than a short wait; measured on the LAMMPS coarse beam: wall x 0.91 alone, x 0.88
-        # beside a busy process, CPU x 0.85, medians of 5 pairs against no sleeping; the
-        # environment's FEMDEM_PATIENCE (s) overrides it for such measurements: docs/benchmarks.md)
-        self.patience = float(os.environ.get("FEMDEM_PATIENCE", patience))
+        self.patience = PATIENCE if patience is None else patience
         self.rounds, self._since, self._drained = 0, None, False
 
     def reset(self) -> None:
