@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import os
 import platform
+import secrets
 import select
 import socket
 import time
@@ -89,6 +90,12 @@ class Backoff:
         return False
 
 
+def new_block(size: int) -> shared_memory.SharedMemory:
+    """A shared-memory block of ``size`` bytes made by this process, named after it
+    (femdem_PID_...): what a process leaves behind can be told from another's."""
+    return shared_memory.SharedMemory(name=f"femdem_{os.getpid()}_{secrets.token_hex(6)}", create=True, size=size)
+
+
 def can_wake() -> bool:
     """Linux's eventfds (Python 3.10+): a waiter may sleep until it is rung."""
     return hasattr(os, "eventfd") and hasattr(socket, "send_fds")
@@ -109,7 +116,7 @@ class Doorbell:
         self.owner = name is None
         self.can_sleep = False  # wake-ups (eventfds) made (owner) or received (worker)
         self._ring_fd = self._wake_fd = -1
-        self.shm = shared_memory.SharedMemory(name=name, create=self.owner, size=8 * 9)
+        self.shm = new_block(8 * 9) if self.owner else shared_memory.SharedMemory(name=name)
         if not self.owner:  # Python < 3.13 registers attached blocks too and would unlink it at exit
             resource_tracker.unregister(self.shm._name, "shared_memory")  # noqa: SLF001
         self.count = np.ndarray((4,), dtype=np.int64, buffer=self.shm.buf)

@@ -117,11 +117,14 @@ def test_subcycled_coupling_is_stable_and_conserves_momentum(femdem, m):
 
 def test_worker_process_gives_the_same_numbers(femdem, tmp_path):
     """The same case with the engine in a worker process (shared memory + socket) reproduces
-    the in-process run bit for bit, and leaves no process or shared-memory block behind."""
+    the in-process run bit for bit, and leaves no process or shared-memory block behind (its
+    own: the blocks this process makes carry its PID; other tests run beside it)."""
     import glob
+    import os
     import subprocess
     import h5py
-    shm_before = set(glob.glob("/dev/shm/*"))
+    ours = f"/dev/shm/femdem_{os.getpid()}_*"
+    shm_before = set(glob.glob(ours))
     code_a, a, _ = femdem("run", "chain_consistency")
     code_b, b, _ = femdem("run", "chain_consistency", "--set", "dem.process=worker")
     assert code_a == code_b == 0 and b["parameters"]["dem.process"] == "worker"
@@ -131,8 +134,8 @@ def test_worker_process_gives_the_same_numbers(femdem, tmp_path):
     for k in ha:
         if k.startswith("u_"):
             assert np.array_equal(ha[k][:], hb[k][:]), k
-    assert set(glob.glob("/dev/shm/*")) <= shm_before
-    ps = subprocess.run(["pgrep", "-f", "dem_region.worker"], capture_output=True, text=True)
+    assert set(glob.glob(ours)) <= shm_before
+    ps = subprocess.run(["pgrep", "-P", str(os.getpid()), "-f", "dem_region.worker"], capture_output=True, text=True)
     assert ps.stdout.strip() == ""
 
 

@@ -47,20 +47,26 @@ def test_engine_worker_crash_is_reported(tmp_path):
     assert s["status"] == "error" and "worker died" in s["message"]
 
 
+def _blocks_of(pid: int) -> list[str]:
+    """The shared-memory blocks process ``pid`` made (doorbell.new_block names them after it):
+    other tests running beside this one make their own."""
+    return glob.glob(f"/dev/shm/femdem_{pid}_*")
+
+
 def test_killed_orchestrator_leaves_no_worker_or_shared_memory(tmp_path):
-    shm_before = set(glob.glob("/dev/shm/*"))
     proc = _start(tmp_path / "run")
     worker = _wait_for_worker(proc)
+    assert _blocks_of(proc.pid), "the orchestrator's blocks are named after it"
     os.kill(proc.pid, signal.SIGKILL)
     proc.wait()
     t0 = time.time()
     while time.time() - t0 < 20:
         alive = subprocess.run(["ps", "-p", str(worker)], capture_output=True).returncode == 0
-        if not alive and set(glob.glob("/dev/shm/*")) <= shm_before:
+        if not alive and not _blocks_of(proc.pid):
             break
         time.sleep(0.2)
     assert not alive, "the worker outlived the orchestrator"
-    assert set(glob.glob("/dev/shm/*")) <= shm_before, "shared memory left behind"
+    assert not _blocks_of(proc.pid), "shared memory left behind"
     assert not (tmp_path / "run").exists(), "a killed run must not look finished"
 
 
@@ -84,7 +90,7 @@ def test_killed_orchestrator_leaves_no_lammps_rank_behind(tmp_path, sig):
     socket close (in a receive or a send), tells the other rank, both shut LAMMPS down and
     mpiexec exits."""
     out = tmp_path / "run"
-    shm_before = set(glob.glob("/dev/shm/*"))
+    mpich_before = set(glob.glob("/dev/shm/mpich*"))
     proc = subprocess.Popen([sys.executable, "-m", "coupling.cli", "run", "coupled_vibration", "--dem", "lammps",
                              "--set", "dem.ranks=2", "--set", "run.steps=200000", "--quiet", "--out", str(out)],
                             cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -100,11 +106,12 @@ def test_killed_orchestrator_leaves_no_lammps_rank_behind(tmp_path, sig):
     t0 = time.time()
     while time.time() - t0 < 30:
         alive = [p for p in family if subprocess.run(["ps", "-p", str(p)], capture_output=True).returncode == 0]
-        if not alive and set(glob.glob("/dev/shm/*")) <= shm_before:
+        left = _blocks_of(proc.pid) + sorted(set(glob.glob("/dev/shm/mpich*")) - mpich_before)
+        if not alive and not left:
             break
         time.sleep(0.2)
     assert not alive, f"processes outlived the orchestrator: {alive}"
-    assert set(glob.glob("/dev/shm/*")) <= shm_before, "shared memory left behind"
+    assert not left, f"shared memory left behind: {left}"
 
 
 def _as_nobody(cmd, cwd):

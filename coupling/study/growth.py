@@ -377,13 +377,13 @@ class _Transfer:
         at = self.region.X[pairs[:, 0]]
         mid = 0.5 * (inter.X[inter.pairs[fresh, 0]] + inter.X[inter.pairs[fresh, 1]])[:, : at.shape[1]]
         src = matches(at, mid, 1e-6 * float(np.ptp(at[:, 0]) + 1e-3))
-        at, src = fresh[src >= 0], src[src >= 0]
+        hit, src = fresh[src >= 0], src[src >= 0]
         pair = bonds[0]
         # the same point of the softening branch (the same fraction of the way from onset to
         # decohesion), not the same damage: the particle bond is softer than the pair
-        inter.damage[at] = pair.law.damage_on(inter.law, pair.damage[src])
-        inter.t_failed[at] = pair.t_failed[src]
-        if len(at):
+        inter.damage[hit] = pair.law.damage_on(inter.law, pair.damage[src])
+        inter.t_failed[hit] = pair.t_failed[src]
+        if len(hit):
             self.softening = f"delaminating (cohesive pairs' damage up to {pair.damage[src].max():.2f})"
 
     @staticmethod

@@ -24,7 +24,7 @@ import numpy as np
 
 from .. import wire
 from ..doorbell import (ADVANCE, ASK, DONE, DT, ENGINE_S, GO, HOOK, MODELS_S, STEPS, Backoff, Doorbell, available,
-                        can_wake)
+                        can_wake, new_block)
 from ..model_step import set_model_states
 from ..scene import DemScene
 from .base import EngineUnavailable
@@ -281,7 +281,7 @@ class RemoteBackend:
 
     def _shared_pair(self, k: int) -> tuple[list[str], list[np.ndarray]]:
         """Two new shared-memory blocks of (k, 3) float64 (released by finalize): names, arrays."""
-        blocks = [shared_memory.SharedMemory(create=True, size=max(8, 8 * 3 * k)) for _ in range(2)]
+        blocks = [new_block(max(8, 8 * 3 * k)) for _ in range(2)]
         self.blocks += blocks
         return [b.name for b in blocks], [np.ndarray((k, 3), dtype=np.float64, buffer=b.buf) for b in blocks]
 
