@@ -95,6 +95,10 @@ class _Ranks:
         """A message from the orchestrator is waiting, or comes within ``timeout`` s (rank 0)."""
         return self.conn.poll(timeout)
 
+    def fileno(self) -> int:
+        """The socket to the orchestrator (rank 0)."""
+        return self.conn.fileno()
+
     def forward(self, msg) -> None:
         """Rank 0: ``msg`` to the other ranks (one the orchestrator gave outside the socket)."""
         if self.comm is not None and self.root:
@@ -228,7 +232,7 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
                 if conn.root:
                     state["bell"] = Doorbell(args[0])
                     if args[1]:  # the wake-ups follow the message on the socket
-                        state["bell"].receive_wakeups(conn.conn.fileno())
+                        state["bell"].receive_wakeups(conn.fileno())
                 conn.send(("ok",))
             elif op == "set_dt":
                 backend.set_dt(args[0])

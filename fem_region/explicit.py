@@ -125,7 +125,7 @@ class ExplicitDynamics:
         self._ke_prev = 0.0
         # the step's buffers, rewritten in place (the step allocates little: on small meshes a
         # step is ruled by the count of numpy operations, not their size)
-        self._du, self._f_int = zero.copy(), zero.copy()
+        self._du, self._f_int, self._f = zero.copy(), zero.copy(), zero.copy()
         self._a_rest = np.zeros(self._prescribed.size)  # the prescribed DOFs' acceleration when none moves
         self._moving = [sup for sup in self.supports if sup.velocity is not at_rest]
         rest = [sup.dofs for sup in self.supports if sup.velocity is at_rest]
@@ -207,9 +207,9 @@ class ExplicitDynamics:
         if self.loads:
             f_ext = self.external_force(s.t)
             L.external_work += 0.5 * float(np.vdot(s.f_ext + f_ext, du))
-            f = f_ext - f_int
+            f = np.subtract(f_ext, f_int, out=self._f)
         else:  # nothing applied: no work; s.f_ext stays zero
-            f_ext, f = s.f_ext, np.negative(f_int)
+            f_ext, f = s.f_ext, np.negative(f_int, out=self._f)
         f_damp = self._damping_force(s.v)
         if f_damp is not None:
             L.damping += float(np.vdot(f_damp, du))
