@@ -206,3 +206,55 @@ def engine_scene(block: PlyBlock, **kw) -> DemScene:
     K_max = float(np.max(block.intra_law.K))
     return DemScene(block.x, block.radius, block.density, np.vstack([block.intra_pairs, block.inter_pairs]),
                     kn=1e-9 * K_max * block.d**2, ks=0.0, young=K_max * block.d, placeholder_bonds=True, **kw)
+
+
+def carve(block: PlyBlock, cells: np.ndarray) -> tuple[PlyBlock, np.ndarray]:
+    """The part of a block (built without half planes) that selected in-plane cells hold: a zone
+    of any footprint on the block's grid (a cylinder, a staircase about an impactor).
+
+    cells: (nx + 1, ny + 1) bool; cell (a, b) is the d x d square between particle columns
+    a - 1 and a along x and b - 1 and b along y (so the first and last cell of each axis lie
+    outside the block's columns), True where the zone's material is. A particle stands for the
+    share of the four cells about its column that are selected (its mass), a bond for the share
+    of the cells along its segment (its area): a vertical bond lies among four cells, an axial
+    bond in the plane or a diagonal in a vertical face between two, a diagonal in the plane
+    inside one. A symmetry plane or a face tied to the FEM is thus a half cell, as half_planes
+    makes it. Returns (the carved block, the kept particles' old indices (n,))."""
+    cells = np.asarray(cells, float)
+    i, j = block.index[:, 0], block.index[:, 1]
+    frac = 0.25 * (cells[i, j] + cells[i + 1, j] + cells[i, j + 1] + cells[i + 1, j + 1])
+    kept = np.flatnonzero(frac > 0)
+    new = np.full(block.n, -1)
+    new[kept] = np.arange(kept.size)
+
+    def share(pairs):
+        a, b = block.index[pairs[:, 0]], block.index[pairs[:, 1]]
+        total = np.zeros(len(pairs))
+        spans = []
+        for axis in (0, 1):  # a segment along the axis crosses one cell, or lies between two
+            lo = np.minimum(a[:, axis], b[:, axis])
+            same = a[:, axis] == b[:, axis]
+            spans.append([(np.where(same, lo, lo + 1), 1.0), (lo + 1, np.where(same, 1.0, 0.0))])
+        weight = np.zeros(len(pairs))
+        for ca, wa in spans[0]:
+            for cb, wb in spans[1]:
+                w = wa * wb
+                total += w * cells[ca, cb]
+                weight += w
+        return total / weight
+
+    f_intra, f_inter = share(block.intra_pairs), share(block.inter_pairs)
+    keep_intra, keep_inter = np.flatnonzero(f_intra > 0), np.flatnonzero(f_inter > 0)
+    law = block.intra_law
+    sub = PlyBondLaw(law.K[keep_intra], law.Gf[keep_intra], law.strengths, law.axes[keep_intra])
+    inter = new[block.inter_pairs[keep_inter]]
+    # the interface pairs' in-plane neighbours (-x, +x, -y, +y) among the kept ones
+    ij = block.index[block.inter_pairs[keep_inter, 0]]
+    lookup = {tuple(r): m for m, r in enumerate(ij.tolist())}
+    along = np.array([[lookup.get((r[0] + di, r[1] + dj, r[2]), -1)
+                       for di, dj in ((-1, 0), (1, 0), (0, -1), (0, 1))] for r in ij.tolist()], int).reshape(-1, 4)
+    d = block.d
+    carved = PlyBlock(block.x[kept], block.radius, block.density[kept] * frac[kept], block.ply[kept],
+                      block.index[kept], block.volume[kept] * frac[kept], new[block.intra_pairs[keep_intra]],
+                      d**2 * f_intra[keep_intra], sub, inter, d**2 * f_inter[keep_inter], block.inter_K, along, d)
+    return carved, kept

@@ -64,7 +64,7 @@ class Study:
         for name_, kind in self.layout.names["supports"].items():
             if kind != at:
                 raise CaseError(f"supports.{name_}.at = {kind!r}: geometry.shape = {shape!r} is supported at its {at}")
-        shapes = {"plate": ("sphere",), "disc": ("rod",), "bonded_beam": (), "bonded_beam_3d": (), "panel": (),
+        shapes = {"plate": ("sphere", "rod"), "disc": ("rod",), "bonded_beam": (), "bonded_beam_3d": (), "panel": (),
                   "beam": ("cylinder", "flat_punch")}.get(shape, ("cylinder",))
         for name_, kind in self.layout.names["impactors"].items():
             if kind not in shapes:
@@ -144,7 +144,17 @@ class Study:
         if shape in ("beam", "bonded_beam"):
             refuse.append(("mesh", "elements_width"))
         if shape not in ("beam", "beam_3d"):  # a zone about x = 0 placed from the estimate: beams'
-            refuse += [("zone", k) for k in ("placement", "grow_at", "margin")]
+            refuse += [("zone", k) for k in ("placement", "grow_at")] + ([] if shape == "plate" else [("zone", "margin")])
+        footprint = P["zone.shape"].default if "zone.shape" in P else "box"
+        if footprint in ("cylinder", "impactor") and shape != "plate":
+            raise CaseError(f"zone.shape = {footprint!r}: a plate's footprint; allowed for {shape!r}: box")
+        auto = P["zone.placement"].default == "auto" if "zone.placement" in P else False
+        if shape != "panel" and P["zone.half_width"].default == 0 and not (footprint == "impactor" or auto):
+            raise CaseError(f"zone.half_width: required for geometry.shape = {shape!r} with zone.shape = "
+                            f"{footprint!r}; allowed: {P['zone.half_width'].allowed()}")
+        if shape == "plate" and len(names["impactors"]) != 1:
+            raise CaseError(f"[impactors.NAME]: a plate takes exactly one impactor on its centre; given "
+                            f"{len(names['impactors'])}")
         if shape not in ("beam", "beam_3d"):  # a zone grown during the run: the beams' so far
             for key in ("grow", "grow_to"):
                 if given("zone", key):

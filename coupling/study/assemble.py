@@ -19,6 +19,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy import ndimage
 
 from dem_region import ply_block, ply_lattice
 from dem_region.particle_impactor import ParticleImpactor
@@ -35,6 +36,7 @@ from ..participants.coupled import coupled_simulation
 from ..participants.dem import dem_only, hold_symmetry_planes
 from ..participants.fem import cohesive_node_bonds, cohesive_penalty, energies_with, fem_only, make_region
 from .schema import section
+from .selectors import footprint
 
 
 @dataclass
@@ -518,9 +520,10 @@ def _particle_block(built: Built, x_end: float, tied: bool, clamped: bool):
     return block, ply_block.engine_scene(block, groups=groups), intra, inter
 
 
-def _block_with_laws(built: Built, columns: tuple[int, int], half: list):
-    """(3D ply block of ``columns`` (nx, ny) particle columns with cells halved on ``half``,
-    its intralaminar and interlaminar LawBonds)."""
+def _block_with_laws(built: Built, columns: tuple[int, int], half: list, cells: np.ndarray | None = None):
+    """(3D ply block of ``columns`` (nx, ny) particle columns with cells halved on ``half``, or
+    carved to the selected ``cells`` (ply_block.carve), its intralaminar and interlaminar
+    LawBonds)."""
     lam, d, p = built.lam, built.t, built.p
     k = round(d / lam.ply_thickness)
     try:
@@ -529,6 +532,8 @@ def _block_with_laws(built: Built, columns: tuple[int, int], half: list):
     except ValueError as exc:
         material = p[f"laminates.{p['geometry.laminate']}.material"]
         raise CaseError(f"materials.{material}.G12 = {lam.ply['G12']:g}: {exc}") from None
+    if cells is not None:
+        block, _ = ply_block.carve(block, cells)
     l = block.x[block.intra_pairs[:, 1]] - block.x[block.intra_pairs[:, 0]]
     intra = LawBonds(block.intra_pairs, block.x, l, block.intra_area, block.intra_law, volume=block.volume,
                      label="intralaminar")
@@ -568,41 +573,53 @@ def _particle_impactor(p: dict, name: str, built: Built) -> ParticleImpactor:
 # -- a plate ------------------------------------------------------------------------------------
 def plate(study, p: dict, mode: str, dem: str):
     """(Simulation, Built) of a quarter of a rectangular laminated plate (symmetry planes x = 0
-    and y = 0, the thickness along z) under impactors on its centre, supported at its edges;
-    the zone a square column |x|, |y| <= zone.half_width through the thickness."""
+    and y = 0, the thickness along z) under an impactor (a sphere or a flat-faced rod) on its
+    centre, supported at its edges; the zone a column through the thickness whose footprint
+    zone.shape selects (study/selectors.py)."""
     built = body_of(p, mode)
     d, t_end = built.t, study.t_end
-    a2, b2, w = 0.5 * p["geometry.span"], 0.5 * p["geometry.width"], p["zone.half_width"]
-    for key, length in (("geometry.span", 2 * a2), ("geometry.width", 2 * b2), ("zone.half_width", 2 * w)):
+    a2, b2 = 0.5 * p["geometry.span"], 0.5 * p["geometry.width"]
+    for key, length in (("geometry.span", 2 * a2), ("geometry.width", 2 * b2)):
         m = 0.5 * length / d
         if abs(m - round(m)) > 1e-6:
             raise CaseError(f"{key} = {p[key]:g}: its half must be a whole number of particle spacings ({d:g} m); "
-                            f"allowed e.g. {2 * max(1, round(m)) * d if key != 'zone.half_width' else max(1, round(m)) * d:g} m")
+                            f"allowed e.g. {2 * max(1, round(m)) * d:g} m")
+    fp = footprint(study, p, built)
     clamp = _support(study, p) == "clamped"
+    (name,) = study.layout.names["impactors"]
     if mode == "fem":
-        region = _fem_plate(p, built, hole=False)
-        imps = {name: _fem_sphere(p, name, built, region) for name in study.layout.names["impactors"]}
+        region = _fem_plate(p, built, fp, hole=False)
+        imps = {name: _fem_striker(study, p, name, built, region)}
         dyn = ExplicitDynamics(region, supports=_plate_supports(region, built, clamp, symmetry=True),
                                impactors=list(imps.values()))
         built.dyn, built.impactors, built.fem_elements = dyn, imps, region.n_elements
         built.node_bonds = _far_field_bonds(p, built, dyn)
         return _with_far_field(fem_only(dyn, p, t_end, {}), built), built
-    if mode == "coupled" and not 2 * d < w < 0.8 * min(a2, b2):
-        raise CaseError(f"zone.half_width = {w:g}: allowed between two particle sizes ({2 * d:g} m) and 0.8 x "
-                        "the plate's smaller half side")
     tied = mode == "coupled"
-    nx, ny = (int(round(w / d)) + 1,) * 2 if tied else (int(round(a2 / d)) + 1, int(round(b2 / d)) + 1)
-    block, intra, inter = _block_with_laws(built, (nx, ny),
-                                           [(0, 0), (1, 0)] + ([(0, nx - 1), (1, ny - 1)] if tied else []))
-    i, j = block.index[:, 0], block.index[:, 1]
-    to_edge = np.minimum(nx - 1 - i, ny - 1 - j)  # columns to the zone's (or plate's) edge
-    edge = np.flatnonzero(to_edge == 0)
+    if tied:
+        nx = ny = int(round(fp.w / d)) + 1
+        cells = fp.cells(d)
+        block, intra, inter = _block_with_laws(built, (nx, ny), [], cells=cells)
+        i, j = block.index[:, 0], block.index[:, 1]
+        fem_cell = ~cells
+        fem_cell[0, :] = fem_cell[:, 0] = False  # beyond the symmetry planes: no FEM
+        on_fem = fem_cell[i, j] | fem_cell[i + 1, j] | fem_cell[i, j + 1] | fem_cell[i + 1, j + 1]
+        edge = np.flatnonzero(on_fem)
+        grid = np.ones((nx, ny), bool)  # particle columns, False on the tied edge (distances from it)
+        grid[i[edge], j[edge]] = False
+        to_edge = ndimage.distance_transform_cdt(grid, metric="chessboard")[i, j]
+    else:
+        nx, ny = int(round(a2 / d)) + 1, int(round(b2 / d)) + 1
+        block, intra, inter = _block_with_laws(built, (nx, ny), [(0, 0), (1, 0)])
+        i, j = block.index[:, 0], block.index[:, 1]
+        to_edge = np.minimum(nx - 1 - i, ny - 1 - j)  # columns to the plate's edge
+        edge = np.flatnonzero(to_edge == 0)
     groups = {"interface": edge} if tied else {"fixed": edge} if clamp else {}
     scene = ply_block.engine_scene(block, groups=groups)
     built.lattice, built.intra, built.inter = block, intra, inter
     built.column = to_edge.max() - to_edge  # the largest on the edge, as a beam's last column
     built.end_held = tied or clamp
-    built.impactors = {name: _particle_sphere(p, name, built) for name in study.layout.names["impactors"]}
+    built.impactors = {name: _particle_striker(study, p, name, built)}
     models = (intra, inter, *built.impactors.values())
     if mode == "dem":
         sim, backend, _ = dem_only(p, scene, dem, t_end, models=models)
@@ -612,7 +629,7 @@ def plate(study, p: dict, mode: str, dem: str):
             backend.set_velocities(bottom, np.zeros((len(bottom), 3)))
     else:
         def make(extra_mass):
-            region = _fem_plate(p, built, hole=True)
+            region = _fem_plate(p, built, fp, hole=True)
             dyn = ExplicitDynamics(region, supports=_plate_supports(region, built, clamp, symmetry=True),
                                    extra_mass=extra_mass)
             built.node_bonds = _far_field_bonds(p, built, dyn)
@@ -633,18 +650,19 @@ def _plate_axis(w: float, half: float, n_zone: int, n: int, ratio: float) -> np.
     return np.concatenate([np.linspace(0.0, w, n_zone + 1)[:-1], mesh.graded(w, half, n, ratio, w)])
 
 
-def _fem_plate(p: dict, built: Built, hole: bool):
-    """Hex8 laminate on the quarter plate, one element layer per particle row; with ``hole``
-    the zone's square column left out (the FEM around the particles)."""
-    lam, k, w = built.lam, p["zone.plies_per_particle"], p["zone.half_width"]
-    n, nz = p["mesh.elements_along"], p["mesh.elements_width"]
+def _fem_plate(p: dict, built: Built, fp, hole: bool):
+    """Hex8 laminate on the quarter plate, one element layer per particle row, mesh.elements_width
+    equal elements over the zone's square; with ``hole`` the zone's elements (those whose centre
+    its footprint holds) left out (the FEM around the particles)."""
+    lam, k, w = built.lam, p["zone.plies_per_particle"], fp.w
+    n, nz = p["mesh.elements_along"], fp.n
     ratio = p["mesh.element_ratio"] ** (1.0 / max(n - 1, 1))
     m = mesh.box(_plate_axis(w, 0.5 * p["geometry.span"], nz, n, ratio),
                  _plate_axis(w, 0.5 * p["geometry.width"], nz, n, ratio),
                  np.linspace(0.0, lam.thickness, sum(lam.plies) // k + 1), "hex8")
     centre = m.p[:, m.t].mean(axis=1)
     if hole:
-        m = m.remove_elements(np.flatnonzero((centre[0] < w) & (centre[1] < w)))
+        m = m.remove_elements(np.flatnonzero(fp.inside(centre[0], centre[1])))
         centre = m.p[:, m.t].mean(axis=1)
     run = np.searchsorted(np.cumsum(lam.plies) * lam.ply_thickness, centre[2])
     return make_region(_split(p, built, m, run), p, np.array([lam.C(lam.angles[b]) for b in run]), lam.ply["rho"],
@@ -668,22 +686,36 @@ def _plate_supports(region, built: Built, clamp: bool, symmetry: bool) -> list[P
     return out
 
 
-def _particle_sphere(p: dict, name: str, built: Built) -> ParticleImpactor:
-    """A quarter of the sphere (two symmetry planes cut it) on the top rows, moving only along z."""
+def _particle_striker(study, p: dict, name: str, built: Built) -> ParticleImpactor:
+    """A quarter of the sphere or rod (two symmetry planes cut it) on the top rows, moving only
+    along z; a rod's face grown by the particle radius meets the particle centres (a rounded
+    edge), its penalty per area times d^2 per particle."""
     q, block, d = section(p, f"impactors.{name}"), built.lattice, built.t
-    H, R, r = built.lam.thickness, q["radius"], block.radius
+    H, r = built.lam.thickness, block.radius
     top = np.flatnonzero(block.index[:, 2] >= block.index[:, 2].max() - 1)
+    if study.layout.names["impactors"][name] == "rod":
+        from .disc import rod
+        return ParticleImpactor(rod(p, name, H, q["penalty"] * d**2, rounding=r), top,
+                                fixed=(True, True, False))
+    R = q["radius"]
     ball = RigidImpactor("sphere", np.array([0.0, 0.0, H - d / 2 + R + r + 1e-9]), R + r, 0.25 * q["mass"],
                          np.array([0.0, 0.0, -q["velocity"]]), q["penalty"] or built.lam.ply["E22"] * d,
                          friction=q["friction"])
     return ParticleImpactor(ball, top, fixed=(True, True, False))
 
 
-def _fem_sphere(p: dict, name: str, built: Built, region) -> RigidImpactor:
-    """A quarter of the sphere on the FEM's top nodes; the particles' penalty times a node's
-    share of the surface in particles."""
+def _fem_striker(study, p: dict, name: str, built: Built, region) -> RigidImpactor:
+    """A quarter of the sphere or rod on the FEM's top nodes. A sphere: the particles' penalty
+    times a node's share of the surface in particles. A rod: each node's consistent share of
+    its face (penalty per area x the integral of the node's shape function over the face)."""
     q, d, H, X = section(p, f"impactors.{name}"), built.t, built.lam.thickness, region.X
     top = X[:, 2] > H - 1e-9 * H
+    if study.layout.names["impactors"][name] == "rod":
+        from .disc import face_shares, rod
+        share = face_shares(region, H, q["radius"])
+        striker = rod(p, name, H, q["penalty"] * float(share.max()))
+        striker.footprint = q["penalty"] * share
+        return striker
     share = max(1.0, np.diff(np.unique(X[top, 0])).min() / d) * max(1.0, np.diff(np.unique(X[top, 1])).min() / d)
     return RigidImpactor("sphere", np.array([0.0, 0.0, H + q["radius"] + 1e-9]), q["radius"], 0.25 * q["mass"],
                          np.array([0.0, 0.0, -q["velocity"]]), (q["penalty"] or built.lam.ply["E22"] * d) * share,

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
+from numpy.polynomial import polynomial as P
 
 from dem_region import ply_lattice
 
@@ -57,31 +58,123 @@ def beam_spring_mass(study, p: dict, f: dict | None = None, delaminated: bool = 
     return q["velocity"] * np.sqrt(M / k)
 
 
+def plate_stiffness(p: dict) -> float:
+    """k (N/m) of the whole clamped plate's one-term Ritz mode under a central load (plate_spring_mass)."""
+    D = _plate_D(p)
+    a, b = p["geometry.span"], p["geometry.width"]
+    al, be = 2 * np.pi / a, 2 * np.pi / b
+    return a * b / 64 * (3 * D[0, 0] * al**4 + 2 * (D[0, 1] + 2 * D[2, 2]) * al**2 * be**2 + 3 * D[1, 1] * be**4)
+
+
+def impactor_mass(study, p: dict) -> float:
+    """kg, the study's one impactor's whole mass: a sphere's, or a rod's rho pi r^2 L."""
+    (imp,) = study.layout.names["impactors"]
+    q = section(p, f"impactors.{imp}")
+    if study.layout.names["impactors"][imp] == "rod":
+        return q["rho"] * np.pi * q["radius"] ** 2 * q["length"]
+    return q["mass"]
+
+
+def plate_contact_radius(study, p: dict) -> float:
+    """The plate's impactor's contact radius (m): a rod's face; a sphere's Hertz radius
+    (3 F R / (4 E*))^(1/3) at the bending spring-mass peak force F = v sqrt(k M),
+    E* = E22 / (1 - nu23^2) (the laminate's through-thickness stiffness against a rigid ball)."""
+    from .assemble import laminate
+    (name,) = study.layout.names["impactors"]
+    q = section(p, f"impactors.{name}")
+    if study.layout.names["impactors"][name] == "rod":
+        return q["radius"]
+    force = q["velocity"] * np.sqrt(plate_stiffness(p) * impactor_mass(study, p))
+    ply = laminate(p, p["geometry.laminate"]).ply
+    return float(np.cbrt(3 * force * q["radius"] * (1 - ply["nu23"] ** 2) / (4 * ply["E22"])))
+
+
 def plate_spring_mass(study, p: dict, f: dict | None = None) -> float:
     """Peak centre deflection (m) of a clamped rectangular plate (span a along x, width b along
-    y) struck at its centre by a rigid mass: v sqrt(M / k), with the one-term Ritz mode
-    w = W (1 + cos 2 pi x / a)(1 + cos 2 pi y / b) / 4 of a specially orthotropic plate:
-    k = (a b / 64) [3 D11 al^4 + 2 (D12 + 2 D66) al^2 be^2 + 3 D22 be^4], al = 2 pi / a,
-    be = 2 pi / b (the bending energy of the mode; an upper bound, 9 % above Timoshenko's
-    clamped square, 178.6 D / a^2), and M the impactor's mass plus 9 / 64 of the plate's."""
-    from fem_region import materials
+    y) struck at its centre by a rigid mass (a sphere or a flat-faced rod): v sqrt(M / k), with
+    the one-term Ritz mode w = W (1 + cos 2 pi x / a)(1 + cos 2 pi y / b) / 4 of a specially
+    orthotropic plate: k = (a b / 64) [3 D11 al^4 + 2 (D12 + 2 D66) al^2 be^2 + 3 D22 be^4],
+    al = 2 pi / a, be = 2 pi / b (the bending energy of the mode; an upper bound, 9 % above
+    Timoshenko's clamped square, 178.6 D / a^2), and M the impactor's mass plus 9 / 64 of the
+    plate's."""
+    _clamped(study, p, "plate_spring_mass")
+    (imp,) = study.layout.names["impactors"]
+    return p[f"impactors.{imp}.velocity"] * np.sqrt(_plate_mass(study, p) / plate_stiffness(p))
+
+
+def plate_spring_mass_bracket(study, p: dict, f: dict | None = None) -> tuple[float, float]:
+    """(low, high) peak centre deflection (m) of the clamped plate under a central impact,
+    v sqrt(M / k): low with the plate's bending stiffness under a central point load alone,
+    high with Mindlin's transverse shear in series, 1 / k = 1 / k_b + ln(R / r) /
+    (2 pi kappa G t) about a load on a disc of radius r (the contact radius, at least half the
+    thickness: through the plies a load spreads over about it, where Mindlin's point load is
+    singular) in a clamped disc of radius R = min(a, b) / 2, kappa = 5/6, G the mean of G12 and
+    G23 (as disc_spring_mass). k_b: Ritz on (1 - xi^2)^2 xi^(2m) x (1 - eta^2)^2 eta^(2n),
+    m, n < 10 (clamped_point_stiffness: the clamped isotropic square within 0.5 % of Timoshenko's
+    178.6 D / a^2); M the impactor's mass plus 9 / 64 of the plate's."""
+    _clamped(study, p, "plate_spring_mass_bracket")
     from .assemble import laminate
     lam = laminate(p, p["geometry.laminate"])
+    a, b, t = p["geometry.span"], p["geometry.width"], lam.thickness
+    r = max(plate_contact_radius(study, p), t / 2)
+    G = 0.5 * (lam.ply["G12"] + lam.ply["G23"])
+    k_bending = clamped_point_stiffness(_plate_D(p), a, b)
+    k_shear = 2 * np.pi * 5 / 6 * G * t / np.log(0.5 * min(a, b) / r)
+    (imp,) = study.layout.names["impactors"]
+    v, M = p[f"impactors.{imp}.velocity"], _plate_mass(study, p)
+    return v * np.sqrt(M / k_bending), v * np.sqrt(M * (1 / k_bending + 1 / k_shear))
+
+
+def _clamped(study, p: dict, form: str) -> None:
     (support,) = study.layout.names["supports"]
     if p[f"supports.{support}.condition"] != "clamped":
         from ..params import CaseError
         raise CaseError(f"supports.{support}.condition = {p[f'supports.{support}.condition']!r}: the closed form "
-                        "plate_spring_mass is for clamped edges; allowed: clamped, or another check")
+                        f"{form} is for clamped edges; allowed: clamped, or another check")
+
+
+def _plate_mass(study, p: dict) -> float:
+    """kg: the impactor's mass plus 9 / 64 of the plate's (the Ritz mode's share)."""
+    from .assemble import laminate
+    lam = laminate(p, p["geometry.laminate"])
+    return impactor_mass(study, p) + 9 / 64 * lam.ply["rho"] * lam.thickness * p["geometry.span"] * p["geometry.width"]
+
+
+def _plate_D(p: dict) -> np.ndarray:
+    """(3, 3) N m, the laminate's plane-stress bending stiffness about its mid-plane."""
+    from fem_region import materials
+    from .assemble import laminate
+    lam = laminate(p, p["geometry.laminate"])
     z = np.cumsum([0] + lam.plies) * lam.ply_thickness - lam.thickness / 2
-    D = sum(materials.plane_stress(lam.C(angle)) * (z1**3 - z0**3) / 3
-            for angle, z0, z1 in zip(lam.angles, z[:-1], z[1:]))
-    a, b = p["geometry.span"], p["geometry.width"]
-    al, be = 2 * np.pi / a, 2 * np.pi / b
-    k = a * b / 64 * (3 * D[0, 0] * al**4 + 2 * (D[0, 1] + 2 * D[2, 2]) * al**2 * be**2 + 3 * D[1, 1] * be**4)
-    (imp,) = study.layout.names["impactors"]
-    q = section(p, f"impactors.{imp}")
-    M = q["mass"] + 9 / 64 * lam.ply["rho"] * lam.thickness * a * b
-    return q["velocity"] * np.sqrt(M / k)
+    return sum(materials.plane_stress(lam.C(angle)) * (z1**3 - z0**3) / 3
+               for angle, z0, z1 in zip(lam.angles, z[:-1], z[1:]))
+
+
+def clamped_point_stiffness(D: np.ndarray, a: float, b: float, n: int = 10) -> float:
+    """k (N/m), a central point load over the centre deflection of a clamped specially
+    orthotropic a x b plate of bending stiffness D (3, 3) N m: Ritz with the clamped trial
+    functions (1 - xi^2)^2 xi^(2m), xi = 2 x / a (and in eta = 2 y / b), m < n, integrated
+    exactly as polynomials."""
+
+    def grams(length):  # {(i, j): int f_m^(i) f_q^(j) dx} over [-length / 2, length / 2]
+        basis = [P.polymul(P.polypow([1, 0, -1], 2), [0] * (2 * m) + [1]) for m in range(n)]
+        s = 2.0 / length  # d/dx = s d/dxi
+        out = {}
+        for i, j in ((0, 0), (1, 1), (2, 2), (2, 0), (0, 2)):
+            G = np.empty((n, n))
+            for m, f in enumerate(basis):
+                for q, g in enumerate(basis):
+                    F = P.polyint(P.polymul(P.polyder(f, i) * s**i, P.polyder(g, j) * s**j))
+                    G[m, q] = (P.polyval(1.0, F) - P.polyval(-1.0, F)) / s
+            out[i, j] = G
+        return out
+
+    X, Y = grams(a), grams(b)
+    K = (D[0, 0] * np.kron(X[2, 2], Y[0, 0]) + D[1, 1] * np.kron(X[0, 0], Y[2, 2])
+         + D[0, 1] * (np.kron(X[2, 0], Y[0, 2]) + np.kron(X[0, 2], Y[2, 0])) + 4 * D[2, 2] * np.kron(X[1, 1], Y[1, 1]))
+    load = np.zeros(n * n)
+    load[0] = 1.0  # only the first trial function is non-zero at the centre
+    return 1.0 / float(load @ np.linalg.solve(K, load))
 
 
 def disc_spring_mass(study, p: dict, f: dict | None = None, delaminated: bool = False) -> float:
@@ -221,6 +314,12 @@ CLOSED_FORMS: dict[str, ClosedForm] = {
         "spring-mass estimate of a clamped plate's peak deflection under a central impact (one impactor)",
         "spring_mass_estimate", plate_spring_mass,
         "spring-mass estimate v sqrt(M / k), k of the one-term Ritz mode of a clamped orthotropic plate"),
+    "plate_spring_mass_bracket": ClosedForm(
+        "spring-mass bracket of a clamped plate's peak deflection under a central impact (one impactor): the "
+        "bending stiffness under a point load (Ritz, converged) alone and in series with Mindlin's transverse shear",
+        "spring_mass_estimate", plate_spring_mass_bracket,
+        "spring-mass bracket v sqrt(M / k): k of a clamped orthotropic plate under a central point load (Ritz), "
+        "alone and with Mindlin's transverse shear about the contact radius"),
     "beam_spring_mass": ClosedForm(
         "spring-mass estimate of a beam's peak deflection under a central impact (one impactor, one support "
         "kind at both ends)", "spring_mass_estimate", beam_spring_mass,

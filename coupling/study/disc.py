@@ -119,12 +119,10 @@ def tributary_area(p: dict, core: bool) -> np.ndarray:
 
 def rod_footprint(region: FemRegion, key: np.ndarray, n: int, H: float, r: float) -> np.ndarray:
     """(n_nodes,) m^2: each top-surface node's share (the surface at z = H, grid keys ``key`` of
-    the (n + 1)^2 surface grid) of the face of a rod of radius r, the integral of its
-    shape function over the part of its quads (bilinear, as the elements are) inside the rod's
-    radius, by midpoint sums on cells of at most r / 40 (n_sub x n_sub per quad); 0 elsewhere.
-    Sums to the quarter face's area (to the sums' resolution of its edge), whatever the mesh:
-    a rod whose radius falls between node rings still presses with its whole face (on the
-    coarse mesh a 17.7 mm rod covered one node and inverted its element)."""
+    the (n + 1)^2 surface grid) of the face of a rod of radius r (quad_shares). Sums to the
+    quarter face's area (to the sums' resolution of its edge), whatever the mesh: a rod whose
+    radius falls between node rings still presses with its whole face (on the coarse mesh a
+    17.7 mm rod covered one node and inverted its element)."""
     top = np.flatnonzero(np.abs(region.X[:, 2] - H) < 1e-9 * H)
     xy = np.full(((n + 1) ** 2, 2), np.nan)
     xy[key[top]] = region.X[top, :2]
@@ -132,13 +130,37 @@ def rod_footprint(region: FemRegion, key: np.ndarray, n: int, H: float, r: float
     corners = np.stack([i * (n + 1) + j, i * (n + 1) + j + 1, (i + 1) * (n + 1) + j, (i + 1) * (n + 1) + j + 1],
                        axis=-1).reshape(-1, 4)  # (quads, 4): (u, v) = (0, 0), (1, 0), (0, 1), (1, 1)
     corners = corners[~np.isnan(xy[corners]).any(axis=(1, 2))]  # the quads the mesh has
-    n_sub = max(24, int(np.ceil(40 * np.ptp(region.X[top, 0]) / n / r)))
+    by_key = quad_shares(xy[corners], corners, (n + 1) ** 2, r, np.ptp(region.X[top, 0]) / n)
+    out = np.zeros(region.n_nodes)
+    out[top] = by_key[key[top]]
+    return out
+
+
+def face_shares(region: FemRegion, H: float, r: float) -> np.ndarray:
+    """(n_nodes,) m^2: each node's share of a rod's face of radius r centred on x = y = 0 on the
+    top faces (z = H) of a Hex8 mesh whose elements are boxes along the axes (a plate's)."""
+    X = region.X
+    T = region.mesh.t
+    on_top = np.abs(X[T, 2] - H) < 1e-9 * H  # (8, nel)
+    faces = np.flatnonzero(on_top.sum(axis=0) == 4)
+    corners = T[:, faces].T[on_top[:, faces].T].reshape(-1, 4)
+    order = np.lexsort((X[corners, 0], X[corners, 1]), axis=-1)  # by y, then x: (0, 0), (1, 0), (0, 1), (1, 1)
+    corners = np.take_along_axis(corners, order, axis=1)
+    size = float(np.min(np.ptp(X[corners, 0], axis=1)))
+    return quad_shares(X[corners][..., :2], corners, region.n_nodes, r, size)
+
+
+def quad_shares(X: np.ndarray, corners: np.ndarray, n: int, r: float, size: float) -> np.ndarray:
+    """(n,) m^2: the integral of each corner's bilinear shape function over the part of its quads
+    inside the radius r about the origin. X: (quads, 4, 2) m, the corners in (u, v) = (0, 0),
+    (1, 0), (0, 1), (1, 1) order; corners: (quads, 4) their indices below n; size: m, a quad's
+    typical side (midpoint sums on cells of at most r / 40)."""
+    n_sub = max(24, int(np.ceil(40 * size / r)))
     g = (np.arange(n_sub) + 0.5) / n_sub
     xi, eta = (a.ravel() for a in np.meshgrid(g, g, indexing="ij"))
     N = np.stack([(1 - xi) * (1 - eta), xi * (1 - eta), (1 - xi) * eta, xi * eta], axis=-1)  # (s, 4)
     dN_dxi = np.stack([-(1 - eta), 1 - eta, -eta, eta], axis=-1)
     dN_deta = np.stack([-(1 - xi), -xi, 1 - xi, xi], axis=-1)
-    X = xy[corners]  # (quads, 4, 2)
     x = np.einsum("sa,qai->qsi", N, X)
     a, b = np.einsum("sa,qai->qsi", dN_dxi, X), np.einsum("sa,qai->qsi", dN_deta, X)
     dA = np.abs(a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]) / n_sub**2  # (quads, s)
@@ -147,10 +169,7 @@ def rod_footprint(region: FemRegion, key: np.ndarray, n: int, H: float, r: float
     # cell's order in area (the Gauss circle problem), 3e-3 of the face at r / 40
     inside = np.clip(0.5 + (r - np.hypot(x[..., 0], x[..., 1])) / np.sqrt(dA), 0.0, 1.0)
     share = np.einsum("qs,sa->qa", dA * inside, N)
-    by_key = np.bincount(corners.ravel(), share.ravel(), minlength=(n + 1) ** 2)
-    out = np.zeros(region.n_nodes)
-    out[top] = by_key[key[top]]
-    return out
+    return np.bincount(corners.ravel(), share.ravel(), minlength=n)
 
 
 def _region(p: dict, lam, core: bool):
@@ -186,7 +205,7 @@ def _node_bonds(p: dict, lam, dyn: ExplicitDynamics, pairs: np.ndarray, area: np
     return cohesive_node_bonds(dyn, pairs, area, law, itf["friction"])
 
 
-def _rod(p: dict, name: str, H: float, penalty: float, rounding: float = 0.0) -> RigidImpactor:
+def rod(p: dict, name: str, H: float, penalty: float, rounding: float = 0.0) -> RigidImpactor:
     """The quarter model's share of the rod, its face on the top surface at z = H."""
     q = section(p, f"impactors.{name}")
     mass = 0.25 * q["rho"] * np.pi * q["radius"] ** 2 * q["length"]
@@ -209,13 +228,13 @@ def disc(study, p: dict, mode: str, dem: str):
         region, pairs, key = _region(p, lam, core=False)
         area_by_key = tributary_area(p, core=False)
         top = np.flatnonzero(np.abs(region.X[:, 2] - H) < 1e-9 * lam.ply_thickness)
-        rod = _rod(p, rod_name, H, penalty * float(np.median(area_by_key[key[top]])))
-        rod.footprint = penalty * rod_footprint(region, key, p["mesh.elements_along"], H,
+        striker = rod(p, rod_name, H, penalty * float(np.median(area_by_key[key[top]])))
+        striker.footprint = penalty * rod_footprint(region, key, p["mesh.elements_along"], H,
                                                 p[f"impactors.{rod_name}.radius"])
-        dyn = ExplicitDynamics(region, supports=_supports(region, p), impactors=[rod])
+        dyn = ExplicitDynamics(region, supports=_supports(region, p), impactors=[striker])
         bonds = _node_bonds(p, lam, dyn, pairs, area_by_key[key[pairs[:, 0]]])
         sim = fem_only(dyn, p, study.t_end, {})
-        built.dyn, built.fem_elements, built.impactors = dyn, region.n_elements, {rod_name: rod}
+        built.dyn, built.fem_elements, built.impactors = dyn, region.n_elements, {rod_name: striker}
     else:
         block, scene, intra, inter, impactor = _particle_zone(p, built, rod_name, penalty)
         area_by_key = tributary_area(p, core=True)
@@ -284,5 +303,5 @@ def _particle_zone(p: dict, built: Built, rod_name: str, penalty: float):
     scene = ply_block.engine_scene(block, groups={"interface": np.flatnonzero((i == N - 1) | (j == N - 1))})
     # the rod grown by the particle radius meets the particle centres (rounded edge: a particle
     # beside the rod is pushed aside, not found deep under the face)
-    rod = _rod(p, rod_name, lam.thickness, penalty * d**2, rounding=block.radius)
-    return block, scene, intra, inter, ParticleImpactor(rod, np.flatnonzero(k >= k.max() - 1), fixed=(True, True, False))
+    striker = rod(p, rod_name, lam.thickness, penalty * d**2, rounding=block.radius)
+    return block, scene, intra, inter, ParticleImpactor(striker, np.flatnonzero(k >= k.max() - 1), fixed=(True, True, False))

@@ -22,8 +22,10 @@ Sections (one concept, one key):
                 width, length, symmetry
 - mesh:         FEM elements and their sizing, graded towards the zone
 - fem:          the FEM's integration and formulation
-- zone:         the DEM damage zone: shape "box" (|x| <= half_width, the whole thickness) or
-                "crack_tips" (a panel's: a window across the delamination at each tip),
+- zone:         the DEM damage zone: shape "box" (|x| <= half_width, the whole thickness),
+                "cylinder" or "impactor" (a plate's footprint: a radius, or the impactor's
+                contact radius plus a margin) or "crack_tips" (a panel's: a window across the
+                delamination at each tip),
                 plies_per_particle (laminates) or particle_size (bonded beams, the disc),
                 ply_failure
 - supports.*:   at "ends" (a beam's, x = +-span / 2), "edges" (a plate's) or "rim" (a disc's),
@@ -31,8 +33,8 @@ Sections (one concept, one key):
 - impactors.*:  shape "cylinder" (a beam's, along its width, on the top face at x = 0: radius,
                 mass_per_width, velocity, penalty, friction) or "flat_punch" (a 2D beam's: a
                 flat face of half_width, otherwise as the cylinder) or "sphere" (a plate's, on its centre:
-                radius, mass, velocity, penalty, friction) or "rod" (a disc's, flat-faced, on its
-                centre: radius, length, rho, velocity, penalty per area)
+                radius, mass, velocity, penalty, friction) or "rod" (a disc's or a plate's: a
+                flat-faced punch on its centre: radius, length, rho, velocity, penalty per area)
 - loads.*:      kind "patch" (a bonded beam's: a force history on its top face about x = 0, as
                 a curve of [time, force] rows or a CSV file, with scale factors) or "shortening" (a
                 panel's: the end shortening, a slow ramp in periods of its first mode)
@@ -133,7 +135,7 @@ KINDS: dict[str, dict[str, dict[str, Param]]] = {
                              unit="N/m", low=0.0),
             "friction": Param(0.2, "impactor friction", low=0.0, high=2.0),
         },
-        "rod": {  # a disc's: a flat-faced rod along z on its centre
+        "rod": {  # a disc's or a plate's: a flat-faced rod (a 3D flat punch) along z on its centre
             "radius": positive(REQUIRED, "rod radius", "m"),
             "length": positive(REQUIRED, "rod length (its mass with rho)", "m"),
             "rho": density(REQUIRED, "rod density"),
@@ -267,9 +269,14 @@ SECTIONS: dict[str, dict[str, Param]] = {
         "hourglass_kappa": Param(0.1, "hourglass coefficient", low=0.0, high=1.0),
     },
     "zone": {
-        "shape": Param("box", "box: |x| <= half_width (a plate: and |y| <= half_width) through the whole "
-                       "thickness", kind="str", choices=("box",)),
-        "half_width": positive(REQUIRED, "half width of the DEM zone about x = 0 (coupled mode)", "m"),
+        "shape": Param("box", "the zone's footprint, a column through the whole thickness: box: |x| <= half_width "
+                       "(a plate: and |y| <= half_width); cylinder (a plate): x^2 + y^2 <= half_width^2; impactor "
+                       "(a plate): a cylinder about the impactor of its contact radius (a sphere's Hertz radius at "
+                       "the spring-mass peak force, a rod's face) plus margin (study/selectors.py)", kind="str",
+                       choices=("box", "cylinder", "impactor")),
+        "half_width": Param(0.0, "half width of the DEM zone about x = 0 (coupled mode), a cylinder's radius; "
+                          "required but with a plate's zone.shape = impactor or a beam's zone.placement = auto",
+                          unit="m", low=0.0),
         "placement": Param("box", "box: the zone is half_width wide; auto (beams): placed from the study's all-FEM "
                            "run, the impactor's contact patch and every element reached from it whose failure index "
                            "reaches grow_at (Hoffman; Hashin interlaminar too with tied far-field plies), plus "
@@ -278,8 +285,9 @@ SECTIONS: dict[str, dict[str, Param]] = {
         "grow_at": Param(0.5, "auto placement and growth: the failure index (1 at initiation) that puts an element in the zone",
                          low=0.05, high=2.0),
         "margin": Param(0.0, "auto placement and growth: the zone's margin beyond the flagged elements, and the widest gap "
-                        "between them it bridges; 0: the laminate's thickness (a contact's own stress field decays over "
-                        "about it) or four particle sizes, the larger", unit="m", low=0.0, high=0.5),
+                        "between them it bridges; a plate's zone.shape = impactor: beyond the contact radius; 0: the "
+                        "laminate's thickness (a contact's own stress field decays over about it) or four particle "
+                        "sizes, the larger", unit="m", low=0.0, high=0.5),
         "grow": Param(False, "grow the zone during the run (beams): at each history sample the far field's failure "
                       "indices (as placement's) are evaluated, and elements whose index reaches grow_at within margin "
                       "of the zone's edge become particles, their state carried over (study/growth.py)", kind="bool"),
