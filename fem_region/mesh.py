@@ -166,6 +166,8 @@ def read_gmsh(path: str | Path, part: str) -> tuple[skfem.Mesh, dict[str, np.nda
                          f"{', '.join(sorted(types)) or 'none of them'}")
     (kind,) = types
     cells = np.vstack([b for _, b in blocks]).astype(np.int64)
+    if kind == "hexahedron":  # Gmsh's (VTK's) corner order to scikit-fem's (as skfem.io.meshio reads it)
+        cells = cells[:, [0, 4, 3, 1, 7, 5, 2, 6]]
     dim = 3 if kind in ("hexahedron", "tetra") else 2
     used = np.unique(cells)
     renumber = np.full(len(m.points), -1)

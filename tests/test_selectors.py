@@ -135,7 +135,8 @@ def test_the_punch_presses_with_its_whole_face_on_the_plate(radius, elements, co
 @pytest.mark.parametrize("mode, dem", [("fem", None), ("coupled", "liggghts"),
                                        *[pytest.param("coupled", e, marks=pytest.mark.slow)
                                          for e in ENGINES if e != "liggghts"],
-                                       *[pytest.param("dem", e, marks=pytest.mark.slow) for e in ENGINES]])
+                                       *[pytest.param("dem", e, marks=pytest.mark.slow)  # (YADE: 386 s)
+                                         for e in ENGINES if e != "yade"]])
 def test_a_plate_under_a_flat_punch_with_its_zone_selected_around_it(femdem, mode, dem):
     """tests/studies/punched_plate.toml, a study written only as a case file: a rod's flat face
     (a 3D flat punch) on the clamped plate, the zone a cylinder about it (zone.shape =

@@ -14,6 +14,7 @@ import numpy as np
 from ..params import CaseError
 from . import closed_forms, fields, probes
 from .assemble import beam, plate
+from .block import block
 from .bonded import bonded_beam
 from .disc import disc
 from .panel import panel as assemble_panel
@@ -59,12 +60,13 @@ class Study:
         self.growth = None  # the last coupled run's growing zone (study/growth.py)
         self._shape_tables(shape, data)
         want = {"beam": ("x", "quad4"), "beam_3d": ("xy", "hex8"), "plate": ("xy", "hex8"), "disc": ("xy", "hex8"),
-                "bonded_beam": ("x", "quad4"), "bonded_beam_3d": ("xy", "hex8"), "panel": ("none", "quad4")}[shape]
-        at = {"plate": "edges", "disc": "rim"}.get(shape, "ends")
+                "bonded_beam": ("x", "quad4"), "bonded_beam_3d": ("xy", "hex8"), "panel": ("none", "quad4"),
+                "block": ("xy", "hex8")}[shape]
+        at = {"plate": "edges", "disc": "rim", "block": "bottom"}.get(shape, "ends")
         for name_, kind in self.layout.names["supports"].items():
             if kind != at:
                 raise CaseError(f"supports.{name_}.at = {kind!r}: geometry.shape = {shape!r} is supported at its {at}")
-        shapes = {"plate": ("sphere", "rod"), "disc": ("rod",), "bonded_beam": (), "bonded_beam_3d": (), "panel": (),
+        shapes = {"plate": ("sphere", "rod"), "block": ("sphere", "rod"), "disc": ("rod",), "bonded_beam": (), "bonded_beam_3d": (), "panel": (),
                   "beam": ("cylinder", "flat_punch")}.get(shape, ("cylinder",))
         for name_, kind in self.layout.names["impactors"].items():
             if kind not in shapes:
@@ -77,6 +79,9 @@ class Study:
             raise CaseError(f"mesh.elements_width: has no effect on a slice; allowed: leave it out, or "
                             f"geometry.shape = '{shape}_3d'")
         for name_, kind in self.layout.names["checks"].items():
+            if kind == "block_spring_mass" and set(self.layout.names["impactors"].values()) != {"rod"}:
+                raise CaseError(f"checks.{name_}.closed_form = 'block_spring_mass': a flat-faced rod's closed form; "
+                                "allowed with impactors of shape 'rod', or another check")
             qoi = self.PARAMETERS[f"checks.{name_}.qoi"].default
             kinds = self.layout.names["probes"]
             if not any(p in qoi or qoi in probes.PROBES[k].reports for p, k in kinds.items()):
@@ -120,6 +125,12 @@ class Study:
                 [("zone", "plies_per_particle"), ("mesh", "elements_width"), ("mesh", "element_ratio")] + \
                 [("mesh", k) for k in ("growth", "max_size", "elements_per_run")]
             refuse_tables = ("sheets", "loads")
+        elif shape == "block":
+            need = [("geometry", "material"), ("geometry", "depth"), ("geometry", "width"), ("zone", "particle_size")]
+            refuse = [("geometry", k) for k in ("laminate", "length")] + \
+                [("zone", k) for k in ("plies_per_particle", "ply_failure")] + \
+                [("mesh", k) for k in ("growth", "max_size", "elements_per_ply", "elements_per_run")]
+            refuse_tables = ("sheets", "loads", "laminates")
         elif shape in LAMINATED:
             need = [("geometry", "laminate"), ("geometry", "width")]
             refuse = [("geometry", k) for k in ("material", "depth", "length")] + [("zone", "particle_size")] + \
@@ -144,16 +155,17 @@ class Study:
         if shape in ("beam", "bonded_beam"):
             refuse.append(("mesh", "elements_width"))
         if shape not in ("beam", "beam_3d"):  # a zone about x = 0 placed from the estimate: beams'
-            refuse += [("zone", k) for k in ("placement", "grow_at")] + ([] if shape == "plate" else [("zone", "margin")])
+            refuse += [("zone", k) for k in ("placement", "grow_at")] + \
+                ([] if shape in ("plate", "block") else [("zone", "margin")])
         footprint = P["zone.shape"].default if "zone.shape" in P else "box"
-        if footprint in ("cylinder", "impactor") and shape != "plate":
-            raise CaseError(f"zone.shape = {footprint!r}: a plate's footprint; allowed for {shape!r}: box")
+        if footprint in ("cylinder", "impactor") and shape not in ("plate", "block"):
+            raise CaseError(f"zone.shape = {footprint!r}: a plate's or a block's footprint; allowed for {shape!r}: box")
         auto = P["zone.placement"].default == "auto" if "zone.placement" in P else False
         if shape != "panel" and P["zone.half_width"].default == 0 and not (footprint == "impactor" or auto):
             raise CaseError(f"zone.half_width: required for geometry.shape = {shape!r} with zone.shape = "
                             f"{footprint!r}; allowed: {P['zone.half_width'].allowed()}")
-        if shape == "plate" and len(names["impactors"]) != 1:
-            raise CaseError(f"[impactors.NAME]: a plate takes exactly one impactor on its centre; given "
+        if shape in ("plate", "block") and len(names["impactors"]) != 1:
+            raise CaseError(f"[impactors.NAME]: a {shape} takes exactly one impactor on its centre; given "
                             f"{len(names['impactors'])}")
         if shape not in ("beam", "beam_3d"):  # a zone grown during the run: the beams' so far
             for key in ("grow", "grow_to"):
@@ -161,13 +173,14 @@ class Study:
                     raise CaseError(f"zone.{key}: a zone grown during the run is built for the beams (geometry.shape "
                                     f"= 'beam' or 'beam_3d') so far; allowed for {shape!r}: leave it out")
                 refuse.append(("zone", key))
-        if shape != "beam":
+        if shape not in ("beam", "block"):
             if given("mesh", "file"):
-                raise CaseError(f"mesh.file: read for geometry.shape = 'beam' only so far; allowed for {shape!r}: "
-                                "leave it out")
+                raise CaseError(f"mesh.file: read for geometry.shape = 'beam' or 'block' so far; allowed for "
+                                f"{shape!r}: leave it out")
             refuse.append(("mesh", "file"))
         elif given("mesh", "file"):
-            for key in ("elements_along", "element_ratio", "elements_per_run"):
+            for key in ("elements_along", "element_ratio", "elements_per_run") + (("elements_width",) if
+                                                                                  shape == "block" else ()):
                 if given("mesh", key):
                     raise CaseError(f"mesh.{key}: has no effect with mesh.file; allowed: leave it out")
                 P.pop(f"mesh.{key}", None)
@@ -184,6 +197,10 @@ class Study:
                 raise CaseError(f"geometry.material = {body!r}: a bonded beam's body is an isotropic material")
             if kinds.get(sheet) != "ply":
                 raise CaseError(f"sheets.{next(iter(names['sheets']))}.material = {sheet!r}: a sheet is a ply material")
+        elif shape == "block":
+            body = P["geometry.material"].default
+            if names["materials"].get(body) != "isotropic":
+                raise CaseError(f"geometry.material = {body!r}: a block's body is an isotropic material")
         else:
             for name_, kind in names["materials"].items():
                 if kind != "ply":
@@ -232,7 +249,7 @@ class Study:
     def assemble(self, p: dict, mode: str, dem: str, start=None):
         """(Simulation, Built) of ``p``: the participants, the probes and the fields."""
         assemble = {"plate": plate, "disc": disc, "bonded_beam": bonded_beam, "bonded_beam_3d": bonded_beam,
-                    "panel": assemble_panel}
+                    "panel": assemble_panel, "block": block}
         placed = self.placement(p, mode)
         if placed is not None:
             p = dict(p, **{"zone.half_width": placed.half_width})
@@ -291,7 +308,8 @@ def _physics_key(p: dict) -> tuple:
 
 def _damage_snapshots(sim, built) -> None:
     """Damage pictures at the first sixth of the run and at its end."""
-    lat, intra, inter, backend = built.lattice, built.intra, built.inter, built.backend
+    lat, intra, backend = built.lattice, built.intra, built.backend
+    inter = built.inter if built.inter is not None else _NoBonds()
     in_90 = (np.array(built.lam.angles)[lat.ply] == 90).astype(float) if built.lam is not None else np.zeros(lat.n)
     t_end = sim.n_steps * sim.dt
     far = _far_field(built)
@@ -312,6 +330,15 @@ def _damage_snapshots(sim, built) -> None:
             "inter_failed": inter.failed().astype(float), "inter_damage": inter.damage.copy(),
             "intra_damage": intra.damage.copy(), "intra_pairs": intra.pairs.astype(float),
             "inter_pairs": inter.pairs.astype(float), "in_90": in_90})
+
+
+class _NoBonds:
+    """The interlaminar family of a body without interfaces (a block): no pairs."""
+
+    pairs, damage = np.zeros((0, 2), int), np.zeros(0)
+
+    def failed(self):
+        return np.zeros(0, bool)
 
 
 def _far_field(built):

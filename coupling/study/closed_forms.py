@@ -89,6 +89,40 @@ def plate_contact_radius(study, p: dict) -> float:
     return float(np.cbrt(3 * force * q["radius"] * (1 - ply["nu23"] ** 2) / (4 * ply["E22"])))
 
 
+def block_contact_radius(study, p: dict) -> float:
+    """A block's impactor's contact radius (m): a rod's face; a sphere's Hertz radius
+    (3 F R / (4 E*))^(1/3) at Hertz's peak impact force on a half-space,
+    F = (5 M v^2 / 4)^(3/5) (4 E* sqrt(R) / 3)^(2/5), E* = E / (1 - nu^2) (a rigid ball)."""
+    (name,) = study.layout.names["impactors"]
+    q = section(p, f"impactors.{name}")
+    if study.layout.names["impactors"][name] == "rod":
+        return q["radius"]
+    m = section(p, f"materials.{p['geometry.material']}")
+    E_star = m["E"] / (1 - m["nu"] ** 2)
+    force = (1.25 * q["mass"] * q["velocity"] ** 2) ** 0.6 * (4 / 3 * E_star * np.sqrt(q["radius"])) ** 0.4
+    return float(np.cbrt(3 * force * q["radius"] / (4 * E_star)))
+
+
+def block_spring_mass(study, p: dict, f: dict | None = None) -> float:
+    """Peak displacement (m) of the top face's centre of a block struck by a flat-faced rod:
+    quasi-static, the rod's mass M on the face's stiffness on a half-space (Boussinesq;
+    Sneddon 1965), k_B = 2 E a / (1 - nu^2) for a rigid flat circular face of radius a, in
+    series with the contact's penalty k_c = penalty pi a^2: the peak force v sqrt(M k),
+    1 / k = 1 / k_B + 1 / k_c, over k_B. The block's finite depth on a floor (stiffer) and its
+    free sides (softer) are left out: valid for a block deep and wide against the face."""
+    (imp,) = study.layout.names["impactors"]
+    q = section(p, f"impactors.{imp}")
+    if study.layout.names["impactors"][imp] != "rod":
+        from ..params import CaseError
+        raise CaseError(f"impactors.{imp}.shape = 'sphere': the closed form block_spring_mass is for a flat-faced rod; "
+                        "allowed: a rod, or another check")
+    m = section(p, f"materials.{p['geometry.material']}")
+    a = q["radius"]
+    k_B = 2 * m["E"] * a / (1 - m["nu"] ** 2)
+    k = 1 / (1 / k_B + 1 / (q["penalty"] * np.pi * a**2))
+    return q["velocity"] * np.sqrt(impactor_mass(study, p) * k) / k_B
+
+
 def plate_spring_mass(study, p: dict, f: dict | None = None) -> float:
     """Peak centre deflection (m) of a clamped rectangular plate (span a along x, width b along
     y) struck at its centre by a rigid mass (a sphere or a flat-faced rod): v sqrt(M / k), with
@@ -320,6 +354,11 @@ CLOSED_FORMS: dict[str, ClosedForm] = {
         "spring_mass_estimate", plate_spring_mass_bracket,
         "spring-mass bracket v sqrt(M / k): k of a clamped orthotropic plate under a central point load (Ritz), "
         "alone and with Mindlin's transverse shear about the contact radius"),
+    "block_spring_mass": ClosedForm(
+        "spring-mass estimate of a block's peak indentation under a flat-faced rod (Boussinesq's rigid punch on a "
+        "half-space in series with the contact penalty)", "spring_mass_estimate", block_spring_mass,
+        "spring-mass estimate v sqrt(M k) / k_B, k_B = 2 E a / (1 - nu^2) (Boussinesq, Sneddon 1965) in series with "
+        "the contact penalty"),
     "beam_spring_mass": ClosedForm(
         "spring-mass estimate of a beam's peak deflection under a central impact (one impactor, one support "
         "kind at both ends)", "spring_mass_estimate", beam_spring_mass,

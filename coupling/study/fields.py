@@ -91,12 +91,14 @@ def frames(built):
         indices = FemIndices(region, built.lam, built.dim) if built.lam is not None else \
             BondedIndices(region, built.bonded, built.dim)
     if lat is not None:
-        pairs = built.inter.pairs
+        inter = built.inter  # None: a body without interfaces (a block)
+        pairs = inter.pairs if inter is not None else np.zeros((0, 2), int)
         mids = nodes + lat.n + np.arange(len(pairs))
         cells["vertex"] = (nodes + np.arange(lat.n))[:, None]
-        cells["line3"] = np.column_stack([nodes + pairs, mids])
+        if len(pairs):
+            cells["line3"] = np.column_stack([nodes + pairs, mids])
         ply = np.asarray(lat.ply, float)
-        bonds = [built.intra, built.inter] + ([built.sheet] if getattr(built, "sheet", None) is not None else [])
+        bonds = [b for b in (built.intra, inter, getattr(built, "sheet", None)) if b is not None]
     points = np.vstack(([_pad(dyn.region.X)] if dyn is not None else [])
                        + ([lat.x, 0.5 * (lat.x[pairs[:, 0]] + lat.x[pairs[:, 1]])] if lat is not None else []))
 
@@ -126,10 +128,11 @@ def frames(built):
                 for end in (0, 1):
                     np.maximum.at(damage, b.pairs[:, end], b.damage)
                     np.add.at(broken, b.pairs[:, end], b.failed())
-            nb = len(built.inter.pairs)
+            nb = len(pairs)
             for name, per_particle, per_bond in (("zone", np.ones(lat.n), np.ones(nb)),
-                                                 ("damage", damage, built.inter.damage.copy()),
-                                                 ("debonded", np.zeros(lat.n), built.inter.failed().astype(float))):
+                                                 ("damage", damage, inter.damage.copy() if nb else np.zeros(0)),
+                                                 ("debonded", np.zeros(lat.n),
+                                                  inter.failed().astype(float) if nb else np.zeros(0))):
                 cd[name] += [per_particle, per_bond]
             for name in ("strain", "stress"):
                 cd[name] += [np.zeros((lat.n, ns or 3)), np.zeros((nb, ns or 3))]

@@ -15,26 +15,28 @@ Sections (one concept, one key):
 - geometry:     shape "beam" (a plane-strain slice of a laminated beam along x, y through the
                 thickness, centred on x = 0), "beam_3d" (a quarter of it, the thickness along
                 z), "plate" (a quarter of a rectangular plate), "bonded_beam" (a plane-stress
-                slice of a beam of one isotropic material with a sheet bonded under it) or
-                "bonded_beam_3d" (a quarter of it) or "disc" (a quarter of a circular plate) or
-                "panel" (a slice of a laminate clamped at both ends, with a delamination); its
-                laminate (with tied or cohesive FEM interfaces) or material and depth, span,
-                width, length, symmetry
+                slice of a beam of one isotropic material with a sheet bonded under it),
+                "bonded_beam_3d" (a quarter of it), "disc" (a quarter of a circular plate),
+                "block" (a quarter of a block of one isotropic material) or "panel" (a slice
+                of a laminate clamped at both ends, with a delamination); its laminate (with
+                tied or cohesive FEM interfaces) or material and depth, span, width, length,
+                symmetry
 - mesh:         FEM elements and their sizing, graded towards the zone
 - fem:          the FEM's integration and formulation
 - zone:         the DEM damage zone: shape "box" (|x| <= half_width, the whole thickness),
-                "cylinder" or "impactor" (a plate's footprint: a radius, or the impactor's
-                contact radius plus a margin) or "crack_tips" (a panel's: a window across the
-                delamination at each tip),
-                plies_per_particle (laminates) or particle_size (bonded beams, the disc),
+                "cylinder" or "impactor" (a plate's or a block's footprint: a radius, or the
+                impactor's contact radius plus a margin) or "crack_tips" (a panel's: a window
+                across the delamination at each tip), plies_per_particle (laminates) or
+                particle_size (bonded beams, the disc, a block),
                 ply_failure
-- supports.*:   at "ends" (a beam's, x = +-span / 2), "edges" (a plate's) or "rim" (a disc's),
-                condition clamped or simply_supported
+- supports.*:   at "ends" (a beam's, x = +-span / 2), "edges" (a plate's), "rim" (a disc's),
+                condition clamped or simply_supported; or "bottom" (a block's: fixed or sliding)
 - impactors.*:  shape "cylinder" (a beam's, along its width, on the top face at x = 0: radius,
                 mass_per_width, velocity, penalty, friction) or "flat_punch" (a 2D beam's: a
-                flat face of half_width, otherwise as the cylinder) or "sphere" (a plate's, on its centre:
-                radius, mass, velocity, penalty, friction) or "rod" (a disc's or a plate's: a
-                flat-faced punch on its centre: radius, length, rho, velocity, penalty per area)
+                flat face of half_width, otherwise as the cylinder) or "sphere" (a plate's or a
+                block's, on its centre: radius, mass, velocity, penalty, friction) or "rod" (a
+                disc's, a plate's or a block's: a flat-faced punch on its centre: radius, length,
+                rho, velocity, penalty per area)
 - loads.*:      kind "patch" (a bonded beam's: a force history on its top face about x = 0, as
                 a curve of [time, force] rows or a CSV file, with scale factors) or "shortening" (a
                 panel's: the end shortening, a slow ramp in periods of its first mode)
@@ -57,7 +59,7 @@ from ..params import CaseError, Param, density, modulus, positive
 from ..participants.coupled import COUPLING
 
 REQUIRED = None  # a field's default when the file must give it
-SHAPES = ("beam", "beam_3d", "plate", "disc", "bonded_beam", "bonded_beam_3d", "panel")
+SHAPES = ("beam", "beam_3d", "plate", "disc", "bonded_beam", "bonded_beam_3d", "panel", "block")
 LAMINATED, BONDED = ("beam", "beam_3d", "plate", "disc"), ("bonded_beam", "bonded_beam_3d")
 
 
@@ -127,7 +129,7 @@ KINDS: dict[str, dict[str, dict[str, Param]]] = {
         },
     },
     "impactors": {
-        "sphere": {  # on a plate's centre
+        "sphere": {  # on a plate's or a block's centre
             "radius": positive(REQUIRED, "sphere radius", "m"),
             "mass": positive(REQUIRED, "mass", "kg"),
             "velocity": positive(REQUIRED, "impact speed (downwards, on the top face at the centre)", "m/s"),
@@ -135,7 +137,7 @@ KINDS: dict[str, dict[str, dict[str, Param]]] = {
                              unit="N/m", low=0.0),
             "friction": Param(0.2, "impactor friction", low=0.0, high=2.0),
         },
-        "rod": {  # a disc's or a plate's: a flat-faced rod (a 3D flat punch) along z on its centre
+        "rod": {  # a disc's, a plate's or a block's: a flat-faced rod (a 3D flat punch) along z on its centre
             "radius": positive(REQUIRED, "rod radius", "m"),
             "length": positive(REQUIRED, "rod length (its mass with rho)", "m"),
             "rho": density(REQUIRED, "rod density"),
@@ -195,6 +197,10 @@ KINDS: dict[str, dict[str, dict[str, Param]]] = {
         "rim": {  # a disc's, at radius span / 2
             "condition": Param("clamped", "clamped (every DOF of the rim held)", kind="str", choices=("clamped",)),
         },
+        "bottom": {  # a block's, its face z = 0
+            "condition": Param("fixed", "fixed (every DOF of the bottom face held) or sliding (its vertical DOF: a "
+                               "frictionless floor)", kind="str", choices=("fixed", "sliding")),
+        },
         "edges": {  # a plate's, at x = +-span / 2 and y = +-width / 2
             "condition": Param("clamped", "clamped (the edge faces held) or simply_supported (their bottom edges "
                                "held vertically)", kind="str", choices=("clamped", "simply_supported")),
@@ -226,11 +232,13 @@ SECTIONS: dict[str, dict[str, Param]] = {
                        "disc: a quarter of a circular plate of diameter span, clamped at its rim; "
                        "bonded_beam: a plane-stress slice of a beam of one isotropic material with a sheet bonded "
                        "to its bottom face; bonded_beam_3d: a quarter of it; panel: a plane-stress slice of a laminate "
-                       "clamped at both ends and shortened axially, with one through-width delamination",
+                       "clamped at both ends and shortened axially, with one through-width delamination; block: a "
+                       "quarter of a rectangular block of one isotropic material, span along x, width along y, depth "
+                       "along z, resting on its bottom face",
                        kind="str", choices=SHAPES),
         "laminate": Param("", "the laminate (a [laminates.*] name; beam, beam_3d, plate)", kind="str"),
-        "material": Param("", "the body's material (an isotropic [materials.*] name; bonded beams)", kind="str"),
-        "depth": Param(0.0, "the body's depth (bonded beams; a laminate's is its plies')", unit="m", low=0.0),
+        "material": Param("", "the body's material (an isotropic [materials.*] name; bonded beams, a block)", kind="str"),
+        "depth": Param(0.0, "the body's depth (bonded beams, a block; a laminate's is its plies')", unit="m", low=0.0),
         "length": Param(0.0, "the beam's length, supports inside it at +-span / 2 (bonded beams); 0: the span",
                         unit="m", low=0.0),
         "span": positive(REQUIRED, "distance between the supports", "m"),
@@ -247,9 +255,11 @@ SECTIONS: dict[str, dict[str, Param]] = {
         "elements_per_ply": Param(1, "a disc's: Hex8 elements through each ply", kind="int", low=1, high=8),
         "file": Param("", "a Gmsh mesh (.msh, read by meshio) of a beam slice's half, x from 0 to span / 2, y "
                       "through the thickness: its physical group named after the laminate is the FEM (quadrangles or "
-                      "triangles, lines at the ply runs' interfaces and at the zone's edge); a physical group named "
-                      "after the [supports.*] table holds that support's nodes; relative to the case file; "
-                      "replaces elements_along and element_ratio", kind="str"),
+                      "triangles, lines at the ply runs' interfaces and at the zone's edge); or of a block's quarter "
+                      "(hexahedra; the group named after its material, elements of one particle cell over the zone's "
+                      "square); a physical group named after the [supports.*] table holds that support's nodes; "
+                      "relative to the case file; replaces elements_along, element_ratio (and a block's "
+                      "elements_width)", kind="str"),
         "element_ratio": Param(6.0, "largest / smallest element length, graded from the zone", low=1.0, high=100.0),
         "elements_per_run": Param(0, "element rows through each run of equal plies (beams); 0: one per particle "
                                   "row (a coarser far field takes a larger stable step)", kind="int", low=0, high=20),
@@ -270,8 +280,8 @@ SECTIONS: dict[str, dict[str, Param]] = {
     },
     "zone": {
         "shape": Param("box", "the zone's footprint, a column through the whole thickness: box: |x| <= half_width "
-                       "(a plate: and |y| <= half_width); cylinder (a plate): x^2 + y^2 <= half_width^2; impactor "
-                       "(a plate): a cylinder about the impactor of its contact radius (a sphere's Hertz radius at "
+                       "(a plate, a block: and |y| <= half_width); cylinder (a plate, a block): x^2 + y^2 <= half_width^2; "
+                       "impactor (a plate, a block): a cylinder about the impactor of its contact radius (a sphere's Hertz radius at "
                        "the spring-mass peak force, a rod's face) plus margin (study/selectors.py)", kind="str",
                        choices=("box", "cylinder", "impactor")),
         "half_width": Param(0.0, "half width of the DEM zone about x = 0 (coupled mode), a cylinder's radius; "
@@ -285,9 +295,9 @@ SECTIONS: dict[str, dict[str, Param]] = {
         "grow_at": Param(0.5, "auto placement and growth: the failure index (1 at initiation) that puts an element in the zone",
                          low=0.05, high=2.0),
         "margin": Param(0.0, "auto placement and growth: the zone's margin beyond the flagged elements, and the widest gap "
-                        "between them it bridges; a plate's zone.shape = impactor: beyond the contact radius; 0: the "
-                        "laminate's thickness (a contact's own stress field decays over about it) or four particle "
-                        "sizes, the larger", unit="m", low=0.0, high=0.5),
+                        "between them it bridges; a plate's or block's zone.shape = impactor: beyond the contact radius; 0: "
+                        "the laminate's thickness (a contact's own stress field decays over about it; a block: the "
+                        "contact radius) or four particle sizes, the larger", unit="m", low=0.0, high=0.5),
         "grow": Param(False, "grow the zone during the run (beams): at each history sample the far field's failure "
                       "indices (as placement's) are evaluated, and elements whose index reaches grow_at within margin "
                       "of the zone's edge become particles, their state carried over (study/growth.py)", kind="bool"),
@@ -295,8 +305,8 @@ SECTIONS: dict[str, dict[str, Param]] = {
                          "it; 0: 0.8 x half the span", unit="m", low=0.0),
         "plies_per_particle": Param(1, "plies per particle row (the particle size is this x ply thickness; "
                                     "laminates)", kind="int", low=1, high=8),
-        "particle_size": Param(0.0, "lattice spacing d (bonded beams: the depth holds a whole number of rows; a "
-                               "disc: it divides the ply thickness and half_width)", unit="m", low=0.0),
+        "particle_size": Param(0.0, "lattice spacing d (bonded beams, a block: the depth holds a whole number of "
+                               "rows; a disc: it divides the ply thickness and half_width)", unit="m", low=0.0),
         "ply_failure": Param(True, "the plies fail by Hoffman in the zone; false: elastic plies (only the "
                              "interfaces fail)", kind="bool"),
     },

@@ -1,4 +1,4 @@
-"""Zones as selectors: the footprint of a quarter plate's particle column (zone.shape).
+"""Zones as selectors: the footprint of a quarter plate's or block's particle column (zone.shape).
 
 The zone is a column through the whole thickness. Its footprint, in the quarter x, y >= 0:
 
@@ -11,8 +11,9 @@ The zone is a column through the whole thickness. Its footprint, in the quarter 
   the thickness, Saint-Venant).
 
 The FEM over the zone's bounding square [0, w]^2 has mesh.elements_width equal elements per
-side; a cylinder's square is rounded up so that each element holds whole particle cells. An
-element whose centre the footprint holds is the zone's: its cells are particles
+side; a cylinder's square is rounded up so that each element holds whole particle cells (a
+mesh file's elements there must be the cells themselves). An element whose centre the
+footprint holds is the zone's: its cells are particles
 (ply_block.carve), the rest FEM. The tie is on the particles between the zone's cells and
 the FEM's: a staircase of element faces, exact for the kinematic tie (the particles lie on
 the faces).
@@ -56,7 +57,11 @@ class Footprint:
 def footprint(study, p: dict, built) -> Footprint:
     """The zone's footprint from zone.shape and its keys; CaseError (one line) when it does not
     fit the plate or does not hold the impactor's face."""
-    d, n, shape = built.t, p["mesh.elements_width"], p["zone.shape"]
+    d, shape = built.t, p["zone.shape"]
+    # a mesh file's elements are matched to the particle cells one by one (its own check); the
+    # structured FEM has mesh.elements_width elements of whole cells over the zone's square
+    cell_wise = bool(p.get("mesh.file"))
+    n = 1 if cell_wise else p["mesh.elements_width"]
     half_side = 0.5 * min(p["geometry.span"], p["geometry.width"])
     key = "zone.margin" if shape == "impactor" else "zone.half_width"
     if shape == "box":
@@ -64,22 +69,27 @@ def footprint(study, p: dict, built) -> Footprint:
         if abs(w / d - round(w / d)) > 1e-6:
             raise CaseError(f"zone.half_width = {w:g}: a whole number of particle spacings ({d:g} m); allowed e.g. "
                             f"{max(1, round(w / d)) * d:g} m")
-        fp = Footprint(w, n, np.inf)
+        fp = Footprint(w, int(round(w / d)) if cell_wise else n, np.inf)
     else:
         if shape == "cylinder":
             radius = p["zone.half_width"]
         else:
-            from .closed_forms import plate_contact_radius  # (closed_forms imports the assembler)
-            radius = plate_contact_radius(study, p) + (p["zone.margin"] or max(built.lam.thickness, 4 * d))
+            from .closed_forms import block_contact_radius, plate_contact_radius  # (they import the assembler)
+            if p["geometry.shape"] == "block":  # a contact's field decays over a few contact radii
+                r = block_contact_radius(study, p)
+                radius = r + (p["zone.margin"] or max(r, 4 * d))
+            else:  # a plate's, over about its thickness (Saint-Venant)
+                radius = plate_contact_radius(study, p) + (p["zone.margin"] or max(built.lam.thickness, 4 * d))
         step = n * d  # the square holds n elements of whole particle cells
-        fp = Footprint(max(1, np.ceil(radius / step - 1e-9)) * step, n, radius)
+        w = max(1, np.ceil(radius / step - 1e-9)) * step
+        fp = Footprint(w, int(round(w / d)) if cell_wise else n, radius)
         if fp.w >= 0.8 * half_side:
             raise CaseError(f"{key} = {p[key]:g}: the zone's square ({fp.w:g} m, mesh.elements_width = {n} elements "
-                            f"of whole particle spacings) reaches past 0.8 x the plate's smaller half side "
+                            f"of whole particle spacings) reaches past 0.8 x the smaller half side "
                             f"({0.8 * half_side:g} m); allowed: a smaller zone or fewer mesh.elements_width")
     if not 2 * d < min(fp.w, fp.radius) or fp.w >= 0.8 * half_side:
         raise CaseError(f"{key} = {p[key]:g}: the zone's radius or half width ({min(fp.w, fp.radius):g} m) allowed "
-                        f"between two particle sizes ({2 * d:g} m) and 0.8 x the plate's smaller half side "
+                        f"between two particle sizes ({2 * d:g} m) and 0.8 x the smaller half side "
                         f"({0.8 * half_side:g} m)")
     (name,) = study.layout.names["impactors"]
     if study.layout.names["impactors"][name] == "rod":

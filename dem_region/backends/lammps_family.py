@@ -264,11 +264,11 @@ class VerletArrays:
             self._cmd(f"fix part{k} part{k} setforce {comps}")
             self._driven[np.ix_(ids, ["xyz".index(c) for c in dofs])] = True
             return
-        if len(self.prescribed):
-            raise NotImplementedError(f"{self.name} adapter: one fully prescribed set (the interface) per scene")
-        self.prescribed = ids
-        self._group("iface", ids)
-        self._cmd("fix hold iface setforce 0 0 0")
+        first = not len(self.prescribed)
+        self.prescribed = ids if first else np.union1d(self.prescribed, ids)  # (the interface, a floor)
+        self._group("iface", ids)  # (a group named again gains the atoms)
+        if first:
+            self._cmd("fix hold iface setforce 0 0 0")
 
     def set_velocities(self, ids: np.ndarray, v: np.ndarray) -> None:
         v = np.asarray(v, float).reshape(-1, 3)

@@ -1,0 +1,100 @@
+"""A block (issue #23): a study of one isotropic material written only as a case file
+(tests/studies/punched_block.toml), an alumina block on a floor under a flat punch, its zone
+selected around the punch; every mode against Boussinesq's rigid punch on a half-space."""
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from conftest import assert_checks
+
+ROOT = Path(__file__).resolve().parents[1]
+BLOCK = ROOT / "tests" / "studies" / "punched_block.toml"
+GMSH = ROOT / "tests" / "studies" / "gmsh_block.toml"
+ENGINES = ["liggghts", "lammps", "yade"]
+
+
+@pytest.mark.parametrize("mode, dem, floor", [
+    pytest.param("coupled", "liggghts", "fixed", marks=pytest.mark.slow),  # (24 s; the suite: the Gmsh block)
+    *[pytest.param("coupled", e, "fixed", marks=pytest.mark.slow) for e in ("lammps", "yade")],
+    pytest.param("fem", None, "fixed", marks=pytest.mark.slow),
+    pytest.param("fem", None, "sliding", marks=pytest.mark.slow),
+    pytest.param("coupled", "liggghts", "sliding", marks=pytest.mark.slow),
+    *[pytest.param("dem", e, "fixed", marks=pytest.mark.slow) for e in ("liggghts", "lammps")]])
+def test_a_block_under_a_flat_punch_holds_boussinesq(femdem, mode, dem, floor):
+    """The punch's peak indentation against the quasi-static rigid punch on a half-space
+    (block_spring_mass, 15 %; measured: all-FEM +6 %, coupled and all-DEM +12 %: the lattice has
+    three particles across the punch's radius), the ledger closed, on a fixed or a sliding
+    floor (the block is ten punch radii deep: the floor barely matters). The coupled run's
+    fixed floor under the zone holds a second fully prescribed particle set beside the tie."""
+    code, s, err = femdem("run", str(BLOCK), "--mode", mode, *(["--dem", dem] if dem else []),
+                          "--set", f"supports.floor.condition={floor}")
+    assert code == 0, err
+    assert_checks(s)
+
+
+@pytest.mark.parametrize("mode, dem", [("coupled", "liggghts"),
+                                       *[pytest.param(m, e, marks=pytest.mark.slow)
+                                         for m, e in [("fem", None), ("coupled", "lammps"), ("coupled", "yade")]]])
+def test_a_block_meshed_by_gmsh_holds_boussinesq(femdem, mode, dem):
+    """tests/studies/gmsh_block.toml: the punched block's FEM from a Gmsh file (its physical
+    volume "alumina" the body, its surface "floor" the support; elements graded to the sides and
+    the floor, 1 mm cells under the zone): the same check (measured: all-FEM -0.2 %, coupled
+    +12 %), the ledger closed."""
+    code, s, err = femdem("run", str(GMSH), "--mode", mode, *(["--dem", dem] if dem else []))
+    assert code == 0, err
+    assert_checks(s)
+
+
+def test_a_gmsh_block_whose_elements_are_not_the_zones_cells_is_refused(femdem):
+    """A zone reaching past the file's 1 mm elements (a 5 mm margin: 8 mm, the file's fine square
+    ends at 7 mm): exit 2, one line naming the file and what it needs."""
+    code, s, err = femdem("run", str(GMSH), "--mode", "coupled", "--set", "zone.margin=5e-3")
+    assert code == 2, err
+    line = err.strip()
+    assert "\n" not in line and all(w in line for w in ("mesh.file", "particle grid")), line
+
+
+def test_the_block_conserves_mass_in_every_mode():
+    """The quarter block's mass: all-FEM, all-DEM (half cells on the symmetry planes and the free
+    sides), and coupled (the FEM around the zone plus the carved column's particles) each
+    rho x span x width x depth / 4, to round-off (the Gmsh block: its FEM is the cheaper)."""
+    from coupling.case import load_case
+    case = load_case(str(GMSH))
+    p = case.parameters
+    quarter = p["materials.alumina.rho"] * p["geometry.span"] * p["geometry.width"] * p["geometry.depth"] / 4
+    masses = {}
+    for mode in ("fem", "dem", "coupled"):
+        sim, built = case.scene.assemble(p, mode, "liggghts")
+        m = 0.0
+        if built.dyn is not None:
+            m += sum(np.ptp(built.dyn.region.X[e], axis=0).prod() for e in built.dyn.region.mesh.t.T) * \
+                p["materials.alumina.rho"]
+        if built.lattice is not None:
+            m += float(np.sum(built.lattice.volume)) * p["materials.alumina.rho"]
+            built.backend.finalize()
+        masses[mode] = m
+    assert masses == pytest.approx({"fem": quarter, "dem": quarter, "coupled": quarter}, rel=1e-10)
+
+
+@pytest.mark.parametrize("edit, words", [
+    (('kind = "isotropic"', 'kind = "ply"'), ["materials.alumina."]),
+    (("depth = 30e-3", "depth = 30.5e-3"), ["zone.particle_size", "whole number"]),
+    (('shape = "rod"', 'shape = "sphere"\nmass = 0.1'), ["block_spring_mass", "rod"]),
+    (('at = "bottom"', 'at = "edges"'), ["supports.floor."]),
+    (("elements_width = 7", "elements_width = 7\nfile = \"gmsh_block.msh\""), ["no effect with mesh.file"]),
+])
+def test_a_block_that_cannot_be_built_is_refused_in_one_line(femdem, tmp_path, edit, words):
+    """A ply material as the body, a depth that is no whole number of particle rows, the punch
+    closed form with a sphere, a plate's support: exit 2, one line, nothing written."""
+    text = BLOCK.read_text().replace(*edit)
+    if edit[1].startswith('shape = "sphere"'):
+        text = text.replace("length = 0.45  # 0.1 kg of steel\nrho = 7850.0\n", "").replace(
+            "penalty = 3.7e14  # Pa/m: about E / d\n", "")
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    code, s, err = femdem("run", str(path), "--mode", "fem")
+    assert code == 2, err
+    line = err.strip()
+    assert "\n" not in line and all(w in line for w in words), line
+    assert not (tmp_path / "run0").exists()
