@@ -82,6 +82,9 @@ class Study:
             if kind == "block_spring_mass" and set(self.layout.names["impactors"].values()) != {"rod"}:
                 raise CaseError(f"checks.{name_}.closed_form = 'block_spring_mass': a flat-faced rod's closed form; "
                                 "allowed with impactors of shape 'rod', or another check")
+            if kind == "block_pressure" and set(self.layout.names["loads"].values()) != {"pressure"}:
+                raise CaseError(f"checks.{name_}.closed_form = 'block_pressure': a pressure load's closed form; "
+                                "allowed with a [loads.*] of kind 'pressure', or another check")
             qoi = self.PARAMETERS[f"checks.{name_}.qoi"].default
             kinds = self.layout.names["probes"]
             if not any(p in qoi or qoi in probes.PROBES[k].reports for p, k in kinds.items()):
@@ -96,7 +99,7 @@ class Study:
         if shape != "panel" and names["delaminations"]:
             raise CaseError(f"[delaminations.{next(iter(names['delaminations']))}]: geometry.shape = {shape!r} takes "
                             "none (a panel's)")
-        want_load = "shortening" if shape == "panel" else "patch"
+        want_load = {"panel": "shortening", "block": "pressure"}.get(shape, "patch")
         for name_, kind in names["loads"].items():
             if kind != want_load:
                 raise CaseError(f"loads.{name_}.kind = {kind!r}: geometry.shape = {shape!r} takes {want_load!r}")
@@ -130,7 +133,7 @@ class Study:
             refuse = [("geometry", k) for k in ("laminate", "length")] + \
                 [("zone", k) for k in ("plies_per_particle", "ply_failure")] + \
                 [("mesh", k) for k in ("growth", "max_size", "elements_per_ply", "elements_per_run")]
-            refuse_tables = ("sheets", "loads", "laminates")
+            refuse_tables = ("sheets", "laminates")
         elif shape in LAMINATED:
             need = [("geometry", "laminate"), ("geometry", "width")]
             refuse = [("geometry", k) for k in ("material", "depth", "length")] + [("zone", "particle_size")] + \
@@ -164,9 +167,12 @@ class Study:
         if shape != "panel" and P["zone.half_width"].default == 0 and not (footprint == "impactor" or auto):
             raise CaseError(f"zone.half_width: required for geometry.shape = {shape!r} with zone.shape = "
                             f"{footprint!r}; allowed: {P['zone.half_width'].allowed()}")
-        if shape in ("plate", "block") and len(names["impactors"]) != 1:
-            raise CaseError(f"[impactors.NAME]: a {shape} takes exactly one impactor on its centre; given "
+        if shape == "plate" and len(names["impactors"]) != 1:
+            raise CaseError(f"[impactors.NAME]: a plate takes exactly one impactor on its centre; given "
                             f"{len(names['impactors'])}")
+        if shape == "block" and len(names["impactors"]) + len(names["loads"]) != 1:
+            raise CaseError(f"[impactors.NAME] or [loads.NAME]: a block takes exactly one, on its top face's centre; "
+                            f"given {len(names['impactors']) + len(names['loads'])}")
         if shape not in ("beam", "beam_3d"):  # a zone grown during the run: the beams' so far
             for key in ("grow", "grow_to"):
                 if given("zone", key):

@@ -147,6 +147,7 @@ class Built:
     width_index: np.ndarray | None = None
     bond_whole: np.ndarray | None = None
     load_probes: dict = field(default_factory=dict)
+    particle_loads: list = field(default_factory=list)  # ParticleLoads the models apply (a block's pressure)
     fibre_stiffness: np.ndarray | None = None
     edge_intra: bool = False
     mesh_groups: dict = field(default_factory=dict)  # a mesh file's physical groups: name -> node coordinates

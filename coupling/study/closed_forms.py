@@ -92,7 +92,11 @@ def plate_contact_radius(study, p: dict) -> float:
 def block_contact_radius(study, p: dict) -> float:
     """A block's impactor's contact radius (m): a rod's face; a sphere's Hertz radius
     (3 F R / (4 E*))^(1/3) at Hertz's peak impact force on a half-space,
-    F = (5 M v^2 / 4)^(3/5) (4 E* sqrt(R) / 3)^(2/5), E* = E / (1 - nu^2) (a rigid ball)."""
+    F = (5 M v^2 / 4)^(3/5) (4 E* sqrt(R) / 3)^(2/5), E* = E / (1 - nu^2) (a rigid ball); or
+    a pressure load's disc."""
+    if not study.layout.names["impactors"]:
+        (load,) = study.layout.names["loads"]
+        return p[f"loads.{load}.radius"]
     (name,) = study.layout.names["impactors"]
     q = section(p, f"impactors.{name}")
     if study.layout.names["impactors"][name] == "rod":
@@ -121,6 +125,19 @@ def block_spring_mass(study, p: dict, f: dict | None = None) -> float:
     k_B = 2 * m["E"] * a / (1 - m["nu"] ** 2)
     k = 1 / (1 / k_B + 1 / (q["penalty"] * np.pi * a**2))
     return q["velocity"] * np.sqrt(impactor_mass(study, p) * k) / k_B
+
+
+def block_pressure(study, p: dict, f: dict | None = None) -> float:
+    """Peak displacement (m) of the top face's centre of a block under a uniform pressure on a
+    disc of radius a, quasi-static on a half-space (Boussinesq; Timoshenko & Goodier, Theory of
+    Elasticity, 1970, section 138): w0 = 2 (1 - nu^2) F / (pi a E), F the load's peak. Valid
+    for a load slow against the block's waves and a block deep and wide against a."""
+    (load,) = study.layout.names["loads"]
+    m = section(p, f"materials.{p['geometry.material']}")
+    from .bonded import load_curve
+    curve = load_curve(p, load)
+    F = max(abs(curve(t)) for t in curve.t)
+    return 2 * (1 - m["nu"] ** 2) * F / (np.pi * p[f"loads.{load}.radius"] * m["E"])
 
 
 def plate_spring_mass(study, p: dict, f: dict | None = None) -> float:
@@ -359,6 +376,10 @@ CLOSED_FORMS: dict[str, ClosedForm] = {
         "half-space in series with the contact penalty)", "spring_mass_estimate", block_spring_mass,
         "spring-mass estimate v sqrt(M k) / k_B, k_B = 2 E a / (1 - nu^2) (Boussinesq, Sneddon 1965) in series with "
         "the contact penalty"),
+    "block_pressure": ClosedForm(
+        "quasi-static displacement of a block's top face's centre under a pressure disc (one [loads.*] of kind "
+        "pressure; Boussinesq's half-space)", "static_estimate", block_pressure,
+        "quasi-static w0 = 2 (1 - nu^2) F / (pi a E), a uniform pressure disc on a half-space (Timoshenko & Goodier)"),
     "beam_spring_mass": ClosedForm(
         "spring-mass estimate of a beam's peak deflection under a central impact (one impactor, one support "
         "kind at both ends)", "spring_mass_estimate", beam_spring_mass,

@@ -144,9 +144,10 @@ def face_shares(region: FemRegion, H: float, r: float) -> np.ndarray:
     on_top = np.abs(X[T, 2] - H) < 1e-9 * H  # (8, nel)
     faces = np.flatnonzero(on_top.sum(axis=0) == 4)
     corners = T[:, faces].T[on_top[:, faces].T].reshape(-1, 4)
-    order = np.lexsort((X[corners, 0], X[corners, 1]), axis=-1)  # by y, then x: (0, 0), (1, 0), (0, 1), (1, 1)
-    corners = np.take_along_axis(corners, order, axis=1)
     size = float(np.min(np.ptp(X[corners, 0], axis=1)))
+    grid = np.round(X[corners, :2] / (1e-6 * size))  # (a mesh file's coordinates carry round-off)
+    order = np.lexsort((grid[..., 0], grid[..., 1]), axis=-1)  # by y, then x: (0, 0), (1, 0), (0, 1), (1, 1)
+    corners = np.take_along_axis(corners, order, axis=1)
     return quad_shares(X[corners][..., :2], corners, region.n_nodes, r, size)
 
 

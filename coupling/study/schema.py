@@ -38,8 +38,10 @@ Sections (one concept, one key):
                 disc's, a plate's or a block's: a flat-faced punch on its centre: radius, length,
                 rho, velocity, penalty per area)
 - loads.*:      kind "patch" (a bonded beam's: a force history on its top face about x = 0, as
-                a curve of [time, force] rows or a CSV file, with scale factors) or "shortening" (a
-                panel's: the end shortening, a slow ramp in periods of its first mode)
+                a curve of [time, force] rows or a CSV file, with scale factors), "pressure" (a
+                block's: the same history as a uniform pressure on a disc of its top face about
+                its centre) or "shortening" (a panel's: the end shortening, a slow ramp in periods
+                of its first mode)
 - delaminations.*: kind "through_width" (a panel's: the plies above it, its length, centred,
                 the sublaminate's bump, contact of its faces)
 - probes.*:     kind from the registry (study/probes.py), with what the run reports of them
@@ -82,6 +84,17 @@ _BEAM_STRIKER = {
     "penalty": Param(0.0, "contact penalty per particle / node; 0 = the lattice's transverse bond stiffness E_y t",
                      unit="N/m", low=0.0),
     "friction": Param(0.2, "impactor friction", low=0.0, high=2.0),
+}
+
+# a load's history: the whole force against time, as a table or a CSV file, with LS-DYNA-style scales
+_PATCH_HISTORY = {
+    "curve": Param(((0.0, 0.0), (1.0, 0.0)), "the whole load's history: rows [time, force] (zero outside); "
+                   "times x time_scale in s, forces x value_scale in N", kind="table"),
+    "file": Param("", "a CSV time,force read instead of curve (relative to the case file; header and # "
+                  "lines skipped), scaled by time_scale and value_scale", kind="str"),
+    "time_scale": positive(1.0, "factor on the curve's times to s (1e-3: given in ms; *DEFINE_CURVE SFA)", ""),
+    "value_scale": positive(1.0, "factor on the curve's forces to N (1e3: given in kN; SFO)", ""),
+    "scale": positive(1.0, "factor on the load (a study's knob)", ""),
 }
 
 KINDS: dict[str, dict[str, dict[str, Param]]] = {
@@ -159,13 +172,11 @@ KINDS: dict[str, dict[str, dict[str, Param]]] = {
     "loads": {
         "patch": {  # on the top face, centred on x = 0, across the whole width, downwards
             "width": positive(REQUIRED, "length of the loaded patch along the beam (both halves)", "m"),
-            "curve": Param(((0.0, 0.0), (1.0, 0.0)), "the whole load's history: rows [time, force] (zero outside); "
-                           "times x time_scale in s, forces x value_scale in N", kind="table"),
-            "file": Param("", "a CSV time,force read instead of curve (relative to the case file; header and # "
-                          "lines skipped), scaled by time_scale and value_scale", kind="str"),
-            "time_scale": positive(1.0, "factor on the curve's times to s (1e-3: given in ms; *DEFINE_CURVE SFA)", ""),
-            "value_scale": positive(1.0, "factor on the curve's forces to N (1e3: given in kN; SFO)", ""),
-            "scale": positive(1.0, "factor on the load (a study's knob)", ""),
+            **_PATCH_HISTORY,
+        },
+        "pressure": {  # a block's: a uniform pressure on a disc of its top face about its centre, downwards
+            "radius": positive(REQUIRED, "radius of the loaded disc", "m"),
+            **_PATCH_HISTORY,
         },
         "shortening": {  # a panel's: its right end moves towards its left, both ends clamped otherwise
             "shortening_factor": Param(1.6, "final end shortening / the intact panel's Euler shortening "
@@ -282,7 +293,8 @@ SECTIONS: dict[str, dict[str, Param]] = {
         "shape": Param("box", "the zone's footprint, a column through the whole thickness: box: |x| <= half_width "
                        "(a plate, a block: and |y| <= half_width); cylinder (a plate, a block): x^2 + y^2 <= half_width^2; "
                        "impactor (a plate, a block): a cylinder about the impactor of its contact radius (a sphere's Hertz radius at "
-                       "the spring-mass peak force, a rod's face) plus margin (study/selectors.py)", kind="str",
+                       "the spring-mass peak force, a rod's face, a pressure load's disc) plus margin "
+                       "(study/selectors.py)", kind="str",
                        choices=("box", "cylinder", "impactor")),
         "half_width": Param(0.0, "half width of the DEM zone about x = 0 (coupled mode), a cylinder's radius; "
                           "required but with a plate's zone.shape = impactor or a beam's zone.placement = auto",

@@ -91,8 +91,9 @@ def footprint(study, p: dict, built) -> Footprint:
         raise CaseError(f"{key} = {p[key]:g}: the zone's radius or half width ({min(fp.w, fp.radius):g} m) allowed "
                         f"between two particle sizes ({2 * d:g} m) and 0.8 x the smaller half side "
                         f"({0.8 * half_side:g} m)")
-    (name,) = study.layout.names["impactors"]
-    if study.layout.names["impactors"][name] == "rod":
+    for name, kind in study.layout.names["impactors"].items():
+        if kind != "rod":
+            continue
         r = p[f"impactors.{name}.radius"]
         if min(fp.w, fp.radius) < r + 2 * d:
             raise CaseError(f"impactors.{name}.radius = {r:g}: the rod's face must stay on the DEM zone; allowed <= "
