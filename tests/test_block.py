@@ -12,6 +12,7 @@ ROOT = Path(__file__).resolve().parents[1]
 BLOCK = ROOT / "tests" / "studies" / "punched_block.toml"
 GMSH = ROOT / "tests" / "studies" / "gmsh_block.toml"
 PRESSED = ROOT / "tests" / "studies" / "pressed_block.toml"
+PRESSED_PLATE = ROOT / "tests" / "studies" / "pressed_plate.toml"
 ENGINES = ["liggghts", "lammps", "yade"]
 
 
@@ -101,10 +102,10 @@ def test_a_block_that_cannot_be_built_is_refused_in_one_line(femdem, tmp_path, e
     assert not (tmp_path / "run0").exists()
 
 
-@pytest.mark.parametrize("mode, dem", [("coupled", "liggghts"),
+@pytest.mark.parametrize("mode, dem", [("fem", None),
                                        *[pytest.param(m, e, marks=pytest.mark.slow)
-                                         for m, e in [("fem", None), ("dem", "liggghts"), ("coupled", "lammps"),
-                                                      ("coupled", "yade")]]])
+                                         for m, e in [("coupled", "liggghts"), ("dem", "liggghts"),
+                                                      ("coupled", "lammps"), ("coupled", "yade")]]])
 def test_a_block_under_a_pressure_history_holds_boussinesq(femdem, mode, dem):
     """tests/studies/pressed_block.toml: a load by selector with a table for its history (a
     pressure disc on the top face, a slow ramp): the disc's centre against the half-space's
@@ -116,14 +117,15 @@ def test_a_block_under_a_pressure_history_holds_boussinesq(femdem, mode, dem):
     assert s["qoi"]["peak_load"] == pytest.approx(1.4e3, rel=1e-12)
 
 
-@pytest.mark.parametrize("mode, zone", [("fem", None), ("dem", None), ("coupled", None), ("coupled", 2.5e-3)])
-def test_the_pressure_disc_is_applied_whole_in_every_mode(mode, zone):
+@pytest.mark.parametrize("study, mode, zone", [(PRESSED, "dem", None), (PRESSED, "coupled", 2.5e-3),
+                                               (PRESSED_PLATE, "coupled", 1.5e-3)])
+def test_the_pressure_disc_is_applied_whole_in_every_mode(study, mode, zone):
     """The FEM faces' and the top particles' shares of the disc sum to the quarter model's
-    quarter of the load however the zone splits it (coupled: the 3 mm disc on a zone selected
-    around it, and on a cylinder zone of 2.5 mm, the rest on the FEM's faces around it), to the
-    midpoint sums' resolution."""
+    quarter of the load however the zone splits it (the block's 3 mm disc on a zone selected
+    around it, and on a cylinder zone of 2.5 mm, the rest on the FEM's faces around it; the
+    plate's 2 mm disc on a 1.5 mm cylinder), to the midpoint sums' resolution."""
     from coupling.case import load_case
-    case = load_case(str(PRESSED))
+    case = load_case(str(study))
     p = case.parameters
     if zone:
         p = dict(p, **{"zone.shape": "cylinder", "zone.half_width": zone})
@@ -134,4 +136,16 @@ def test_the_pressure_disc_is_applied_whole_in_every_mode(mode, zone):
         built.backend.finalize()
     assert on_fem + on_particles == pytest.approx(-0.25, rel=2e-3)
     if zone:
-        assert on_fem < -0.05 and on_particles < -0.05  # split between both
+        assert on_fem < -0.02 and on_particles < -0.02  # split between both
+
+
+@pytest.mark.parametrize("mode, dem", [("fem", None), *[pytest.param("coupled", e, marks=pytest.mark.slow)
+                                                        for e in ENGINES]])
+def test_a_plate_under_a_pressure_history_holds_its_static_bracket(femdem, mode, dem):
+    """tests/studies/pressed_plate.toml: the clamped plate under a smooth pressure ramp on a
+    central disc against the quasi-static bracket (point-load bending, alone and with Mindlin's
+    shear about the disc; measured: all-FEM +7 %, coupled +10 % above its shear side, which the
+    15 % covers), the ledger closed."""
+    code, s, err = femdem("run", str(PRESSED_PLATE), "--mode", mode, *(["--dem", dem] if dem else []))
+    assert code == 0, err
+    assert_checks(s)

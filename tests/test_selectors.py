@@ -132,7 +132,7 @@ def test_the_punch_presses_with_its_whole_face_on_the_plate(radius, elements, co
     assert np.all(np.hypot(*region.X[on, :2].T) < radius + np.sqrt(2) * 5e-3 / elements)
 
 
-@pytest.mark.parametrize("mode, dem", [("fem", None), ("coupled", "liggghts"),
+@pytest.mark.parametrize("mode, dem", [pytest.param("fem", None, marks=pytest.mark.slow), ("coupled", "liggghts"),
                                        *[pytest.param("coupled", e, marks=pytest.mark.slow)
                                          for e in ENGINES if e != "liggghts"],
                                        *[pytest.param("dem", e, marks=pytest.mark.slow)  # (YADE: 386 s)

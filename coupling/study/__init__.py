@@ -79,12 +79,13 @@ class Study:
             raise CaseError(f"mesh.elements_width: has no effect on a slice; allowed: leave it out, or "
                             f"geometry.shape = '{shape}_3d'")
         for name_, kind in self.layout.names["checks"].items():
-            if kind == "block_spring_mass" and set(self.layout.names["impactors"].values()) != {"rod"}:
-                raise CaseError(f"checks.{name_}.closed_form = 'block_spring_mass': a flat-faced rod's closed form; "
-                                "allowed with impactors of shape 'rod', or another check")
-            if kind == "block_pressure" and set(self.layout.names["loads"].values()) != {"pressure"}:
-                raise CaseError(f"checks.{name_}.closed_form = 'block_pressure': a pressure load's closed form; "
-                                "allowed with a [loads.*] of kind 'pressure', or another check")
+            if kind in FORM_NEEDS:  # a closed form of one shape and one kind of loading
+                shape_, needs = FORM_NEEDS[kind]
+                given = {**{k: "impactor" for k in self.layout.names["impactors"].values()},
+                         **{k: "load" for k in self.layout.names["loads"].values()}}
+                if shape != shape_ or not given or not all(k == needs or given[k] == needs for k in given):
+                    raise CaseError(f"checks.{name_}.closed_form = {kind!r}: for geometry.shape = {shape_!r} under "
+                                    f"{FORM_WORDS[needs]}; allowed: another check")
             qoi = self.PARAMETERS[f"checks.{name_}.qoi"].default
             kinds = self.layout.names["probes"]
             if not any(p in qoi or qoi in probes.PROBES[k].reports for p, k in kinds.items()):
@@ -99,7 +100,7 @@ class Study:
         if shape != "panel" and names["delaminations"]:
             raise CaseError(f"[delaminations.{next(iter(names['delaminations']))}]: geometry.shape = {shape!r} takes "
                             "none (a panel's)")
-        want_load = {"panel": "shortening", "block": "pressure"}.get(shape, "patch")
+        want_load = {"panel": "shortening", "block": "pressure", "plate": "pressure"}.get(shape, "patch")
         for name_, kind in names["loads"].items():
             if kind != want_load:
                 raise CaseError(f"loads.{name_}.kind = {kind!r}: geometry.shape = {shape!r} takes {want_load!r}")
@@ -139,7 +140,7 @@ class Study:
             refuse = [("geometry", k) for k in ("material", "depth", "length")] + [("zone", "particle_size")] + \
                 [("mesh", k) for k in ("growth", "max_size", "elements_per_ply")] + \
                 ([("mesh", "elements_per_run")] if shape == "plate" else [])
-            refuse_tables = ("sheets", "loads")
+            refuse_tables = ("sheets",) if shape == "plate" else ("sheets", "loads")
         else:
             need = [("geometry", "material"), ("geometry", "depth"), ("geometry", "width"), ("zone", "particle_size")]
             refuse = [("geometry", "laminate"), ("zone", "plies_per_particle"), ("zone", "ply_failure"),
@@ -167,12 +168,9 @@ class Study:
         if shape != "panel" and P["zone.half_width"].default == 0 and not (footprint == "impactor" or auto):
             raise CaseError(f"zone.half_width: required for geometry.shape = {shape!r} with zone.shape = "
                             f"{footprint!r}; allowed: {P['zone.half_width'].allowed()}")
-        if shape == "plate" and len(names["impactors"]) != 1:
-            raise CaseError(f"[impactors.NAME]: a plate takes exactly one impactor on its centre; given "
-                            f"{len(names['impactors'])}")
-        if shape == "block" and len(names["impactors"]) + len(names["loads"]) != 1:
-            raise CaseError(f"[impactors.NAME] or [loads.NAME]: a block takes exactly one, on its top face's centre; "
-                            f"given {len(names['impactors']) + len(names['loads'])}")
+        if shape in ("plate", "block") and len(names["impactors"]) + len(names["loads"]) != 1:
+            raise CaseError(f"[impactors.NAME] or [loads.NAME]: a {shape} takes exactly one, on its top face's "
+                            f"centre; given {len(names['impactors']) + len(names['loads'])}")
         if shape not in ("beam", "beam_3d"):  # a zone grown during the run: the beams' so far
             for key in ("grow", "grow_to"):
                 if given("zone", key):
@@ -304,6 +302,12 @@ class Study:
         plots.zone(history, plots_dir)
 
 
+# closed forms of one shape and one loading: form -> (shape, what loads it)
+FORM_NEEDS = {"block_spring_mass": ("block", "rod"), "block_pressure": ("block", "pressure"),
+              "plate_spring_mass": ("plate", "impactor"), "plate_spring_mass_bracket": ("plate", "impactor"),
+              "plate_pressure_bracket": ("plate", "pressure")}
+FORM_WORDS = {"rod": "a flat-faced rod (impactors.*.shape = 'rod')", "impactor": "an impactor",
+              "pressure": "a pressure load ([loads.*] kind = 'pressure')"}
 PLACEMENT_KEYS = ("zone.placement", "zone.grow_at", "zone.margin", "zone.half_width", "zone.grow", "zone.grow_to")
 
 

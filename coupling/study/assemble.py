@@ -574,8 +574,8 @@ def _particle_impactor(p: dict, name: str, built: Built) -> ParticleImpactor:
 # -- a plate ------------------------------------------------------------------------------------
 def plate(study, p: dict, mode: str, dem: str):
     """(Simulation, Built) of a quarter of a rectangular laminated plate (symmetry planes x = 0
-    and y = 0, the thickness along z) under an impactor (a sphere or a flat-faced rod) on its
-    centre, supported at its edges; the zone a column through the thickness whose footprint
+    and y = 0, the thickness along z) under an impactor (a sphere or a flat-faced rod) or a
+    pressure history on a disc (study/pressure.py) at its centre, supported at its edges; the zone a column through the thickness whose footprint
     zone.shape selects (study/selectors.py)."""
     built = body_of(p, mode)
     d, t_end = built.t, study.t_end
@@ -585,16 +585,22 @@ def plate(study, p: dict, mode: str, dem: str):
         if abs(m - round(m)) > 1e-6:
             raise CaseError(f"{key} = {p[key]:g}: its half must be a whole number of particle spacings ({d:g} m); "
                             f"allowed e.g. {2 * max(1, round(m)) * d:g} m")
+    from .bonded import load_curve
+    from .pressure import fem_pressure, particle_pressure  # (they import the disc, which imports this)
     fp = footprint(study, p, built)
     clamp = _support(study, p) == "clamped"
-    (name,) = study.layout.names["impactors"]
+    names, loads = list(study.layout.names["impactors"]), list(study.layout.names["loads"])
+    curve = load_curve(p, loads[0]) if loads else None
+    H = built.lam.thickness
     if mode == "fem":
         region = _fem_plate(p, built, fp, hole=False)
-        imps = {name: _fem_striker(study, p, name, built, region)}
+        imps = {name: _fem_striker(study, p, name, built, region) for name in names}
         dyn = ExplicitDynamics(region, supports=_plate_supports(region, built, clamp, symmetry=True),
-                               impactors=list(imps.values()))
+                               impactors=list(imps.values()), loads=fem_pressure(p, loads, region, H, curve))
         built.dyn, built.impactors, built.fem_elements = dyn, imps, region.n_elements
         built.node_bonds = _far_field_bonds(p, built, dyn)
+        if loads:
+            built.load_probes = {loads[0]: lambda: float(curve(dyn.state.t))}
         return _with_far_field(fem_only(dyn, p, t_end, {}), built), built
     tied = mode == "coupled"
     if tied:
@@ -620,8 +626,13 @@ def plate(study, p: dict, mode: str, dem: str):
     built.lattice, built.intra, built.inter = block, intra, inter
     built.column = to_edge.max() - to_edge  # the largest on the edge, as a beam's last column
     built.end_held = tied or clamp
-    built.impactors = {name: _particle_striker(study, p, name, built)}
+    built.impactors = {name: _particle_striker(study, p, name, built) for name in names}
     models = (intra, inter, *built.impactors.values())
+    if loads:
+        load = particle_pressure(p, loads[0], block, cells if tied else None, (a2, b2), curve)
+        models += (load,)
+        built.particle_loads = [load]
+        built.load_probes = {loads[0]: lambda: float(curve(load.time))}
     if mode == "dem":
         sim, backend, _ = dem_only(p, scene, dem, t_end, models=models)
         if not clamp:  # simply supported: the bottom particles of the edges, vertically
@@ -632,7 +643,7 @@ def plate(study, p: dict, mode: str, dem: str):
         def make(extra_mass):
             region = _fem_plate(p, built, fp, hole=True)
             dyn = ExplicitDynamics(region, supports=_plate_supports(region, built, clamp, symmetry=True),
-                                   extra_mass=extra_mass)
+                                   extra_mass=extra_mass, loads=fem_pressure(p, loads, region, H, curve))
             built.node_bonds = _far_field_bonds(p, built, dyn)
             return dyn
         sim, clock = coupled_simulation(p, make, scene, dem, t_end, models=models)

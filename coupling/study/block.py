@@ -23,9 +23,8 @@ from __future__ import annotations
 import numpy as np
 
 from dem_region import ply_block, ply_lattice
-from dem_region.particle_load import ParticleLoad
 from fem_region import mesh
-from fem_region.explicit import ExplicitDynamics, NodalLoad, PrescribedMotion
+from fem_region.explicit import ExplicitDynamics, PrescribedMotion
 from physics.failure import HoffmanStrengths
 from physics.law_bonds import LawBonds
 
@@ -35,7 +34,7 @@ from ..participants.dem import dem_only
 from ..participants.fem import fem_only, make_region
 from .assemble import Built, Laminate, _fem_striker, _particle_striker, _plate_axis
 from .bonded import load_curve
-from .disc import face_shares
+from .pressure import fem_pressure, particle_pressure
 from .schema import section
 from .selectors import footprint
 
@@ -79,9 +78,8 @@ def block(study, p: dict, mode: str, dem: str):
     if mode == "fem":
         region = _fem_block(p, lam, fp, hole=False)
         imps = {name: _fem_striker(study, p, name, built, region) for name in names}
-        fem_load = [_fem_pressure(p, loads[0], region, lam.thickness, curve)] if loads else []
         dyn = ExplicitDynamics(region, supports=_supports(region, fixed, named), impactors=list(imps.values()),
-                               loads=[f for f in fem_load if f is not None])
+                               loads=fem_pressure(p, loads, region, lam.thickness, curve))
         built.dyn, built.impactors, built.fem_elements = dyn, imps, region.n_elements
         if loads:
             built.load_probes = {loads[0]: lambda: float(curve(dyn.state.t))}
@@ -117,11 +115,7 @@ def block(study, p: dict, mode: str, dem: str):
     built.impactors = {name: _particle_striker(study, p, name, built) for name in names}
     models = (intra, *built.impactors.values())
     if loads:
-        on = np.flatnonzero(k == k.max())
-        share = _pressure_shares(lattice.x[on, :2], d, p[f"loads.{loads[0]}.radius"],
-                                 cells if tied else None, (a2, b2))
-        load = ParticleLoad(on[share > 0], np.outer(-share[share > 0] / (np.pi * p[f"loads.{loads[0]}.radius"] ** 2),
-                                                     [0.0, 0.0, 1.0]), curve)
+        load = particle_pressure(p, loads[0], lattice, cells if tied else None, (a2, b2), curve)
         models += (load,)
         built.particle_loads = [load]
         built.load_probes = {loads[0]: lambda: float(curve(load.time))}
@@ -130,9 +124,8 @@ def block(study, p: dict, mode: str, dem: str):
     else:
         def make(extra_mass):
             region = _fem_block(p, lam, fp, hole=True)
-            fem_load = [_fem_pressure(p, loads[0], region, lam.thickness, curve)] if loads else []
             return ExplicitDynamics(region, supports=_supports(region, fixed, named), extra_mass=extra_mass,
-                                    loads=[f for f in fem_load if f is not None])
+                                    loads=fem_pressure(p, loads, region, lam.thickness, curve))
         sim, clock = coupled_simulation(p, make, scene, dem, study.t_end, models=models)
         backend, built.dyn, built.fem_elements = clock.dem, clock.fem, clock.fem.region.n_elements
     built.backend = backend
@@ -175,34 +168,6 @@ def _fem_block(p: dict, lam: Laminate, fp, hole: bool):
         centre = m.p[:, m.t].mean(axis=1)
         m = m.remove_elements(np.flatnonzero(fp.inside(centre[0], centre[1])))
     return make_region(m, p, lam.C(0.0), lam.ply["rho"], 1.0)
-
-
-def _fem_pressure(p: dict, name: str, region, H: float, curve) -> NodalLoad | None:
-    """The pressure disc's consistent nodal forces on the FEM's top faces (z = H), a quarter of the
-    whole load at most (the part on particles is theirs); None when no FEM face is under it."""
-    r = p[f"loads.{name}.radius"]
-    share = face_shares(region, H, r)  # m^2
-    nodes = np.flatnonzero(share > 0)
-    if not nodes.size:
-        return None
-    return NodalLoad(3 * nodes + 2, -share[nodes] / (np.pi * r**2), curve)
-
-
-def _pressure_shares(xy: np.ndarray, d: float, r: float, cells: np.ndarray | None, half_sides) -> np.ndarray:
-    """(k,) m^2: each top particle's share of the pressure disc of radius r about the origin:
-    the part of its d x d footprint inside the disc, the quarter (x, y >= 0), the block, and
-    the zone's selected cells (``cells``: ply_block.carve's padded mask; None: the whole block),
-    by midpoint sums on 40 x 40 sub-cells."""
-    n = 40
-    g = (np.arange(n) + 0.5) / n - 0.5
-    sx, sy = (a.ravel() * d for a in np.meshgrid(g, g, indexing="ij"))
-    X, Y = xy[:, :1] + sx, xy[:, 1:2] + sy  # (k, n^2)
-    ok = (X >= 0) & (Y >= 0) & (X <= half_sides[0]) & (Y <= half_sides[1]) & (np.hypot(X, Y) <= r)
-    if cells is not None:
-        a = np.clip(np.floor(X / d).astype(int) + 1, 0, cells.shape[0] - 1)
-        b = np.clip(np.floor(Y / d).astype(int) + 1, 0, cells.shape[1] - 1)
-        ok &= cells[a, b]
-    return ok.sum(axis=1) * (d / n) ** 2
 
 
 def _named(p: dict, support: str) -> np.ndarray | None:

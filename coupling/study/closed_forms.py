@@ -80,6 +80,9 @@ def plate_contact_radius(study, p: dict) -> float:
     (3 F R / (4 E*))^(1/3) at the bending spring-mass peak force F = v sqrt(k M),
     E* = E22 / (1 - nu23^2) (the laminate's through-thickness stiffness against a rigid ball)."""
     from .assemble import laminate
+    if not study.layout.names["impactors"]:  # a pressure load's disc
+        (load,) = study.layout.names["loads"]
+        return p[f"loads.{load}.radius"]
     (name,) = study.layout.names["impactors"]
     q = section(p, f"impactors.{name}")
     if study.layout.names["impactors"][name] == "rod":
@@ -174,6 +177,27 @@ def plate_spring_mass_bracket(study, p: dict, f: dict | None = None) -> tuple[fl
     (imp,) = study.layout.names["impactors"]
     v, M = p[f"impactors.{imp}.velocity"], _plate_mass(study, p)
     return v * np.sqrt(M / k_bending), v * np.sqrt(M * (1 / k_bending + 1 / k_shear))
+
+
+def plate_pressure_bracket(study, p: dict, f: dict | None = None) -> tuple[float, float]:
+    """(low, high) quasi-static centre deflection (m) of the clamped plate under its pressure
+    load's peak F on a central disc: F / k_b (the plate's bending stiffness under a point load,
+    clamped_point_stiffness) and F (1 / k_b + ln(R / r) / (2 pi kappa G t)) with Mindlin's shear
+    about the disc (r at least half the thickness), as plate_spring_mass_bracket. Valid for a
+    load slow against the plate's first period."""
+    _clamped(study, p, "plate_pressure_bracket")
+    from .assemble import laminate
+    from .bonded import load_curve
+    lam = laminate(p, p["geometry.laminate"])
+    a, b, t = p["geometry.span"], p["geometry.width"], lam.thickness
+    (load,) = study.layout.names["loads"]
+    curve = load_curve(p, load)
+    F = max(abs(curve(s)) for s in curve.t)
+    r = max(p[f"loads.{load}.radius"], t / 2)
+    G = 0.5 * (lam.ply["G12"] + lam.ply["G23"])
+    k_bending = clamped_point_stiffness(_plate_D(p), a, b)
+    k_shear = 2 * np.pi * 5 / 6 * G * t / np.log(0.5 * min(a, b) / r)
+    return F / k_bending, F * (1 / k_bending + 1 / k_shear)
 
 
 def _clamped(study, p: dict, form: str) -> None:
@@ -376,6 +400,12 @@ CLOSED_FORMS: dict[str, ClosedForm] = {
         "half-space in series with the contact penalty)", "spring_mass_estimate", block_spring_mass,
         "spring-mass estimate v sqrt(M k) / k_B, k_B = 2 E a / (1 - nu^2) (Boussinesq, Sneddon 1965) in series with "
         "the contact penalty"),
+    "plate_pressure_bracket": ClosedForm(
+        "quasi-static bracket of a clamped plate's centre deflection under a pressure disc (one [loads.*] of kind "
+        "pressure): point-load bending (Ritz) alone and with Mindlin's shear about the disc", "static_estimate",
+        plate_pressure_bracket,
+        "quasi-static bracket F / k: k of a clamped orthotropic plate under a central point load (Ritz), alone and "
+        "with Mindlin's transverse shear about the disc"),
     "block_pressure": ClosedForm(
         "quasi-static displacement of a block's top face's centre under a pressure disc (one [loads.*] of kind "
         "pressure; Boussinesq's half-space)", "static_estimate", block_pressure,

@@ -39,8 +39,8 @@ Sections (one concept, one key):
                 rho, velocity, penalty per area)
 - loads.*:      kind "patch" (a bonded beam's: a force history on its top face about x = 0, as
                 a curve of [time, force] rows or a CSV file, with scale factors), "pressure" (a
-                block's: the same history as a uniform pressure on a disc of its top face about
-                its centre) or "shortening" (a panel's: the end shortening, a slow ramp in periods
+                block's or a plate's: the same history as a uniform pressure on a disc of its top
+                face about its centre) or "shortening" (a panel's: the end shortening, a slow ramp in periods
                 of its first mode)
 - delaminations.*: kind "through_width" (a panel's: the plies above it, its length, centred,
                 the sublaminate's bump, contact of its faces)
@@ -174,7 +174,7 @@ KINDS: dict[str, dict[str, dict[str, Param]]] = {
             "width": positive(REQUIRED, "length of the loaded patch along the beam (both halves)", "m"),
             **_PATCH_HISTORY,
         },
-        "pressure": {  # a block's: a uniform pressure on a disc of its top face about its centre, downwards
+        "pressure": {  # a block's or a plate's: a uniform pressure on a disc of its top face about its centre, downwards
             "radius": positive(REQUIRED, "radius of the loaded disc", "m"),
             **_PATCH_HISTORY,
         },
@@ -256,10 +256,10 @@ SECTIONS: dict[str, dict[str, Param]] = {
         "width": Param(0.0, "width out of the slice's plane (forces are reported for the whole width); not a "
                        "disc's", unit="m", low=0.0),
         "symmetry": Param("x", "the symmetry planes: x (beam: half model about x = 0) or xy (beam_3d: also "
-                          "mid-width y = 0; plate)", kind="str", choices=("x", "xy")),
+                          "mid-width y = 0; plate, disc, block)", kind="str", choices=("x", "xy")),
     },
     "mesh": {
-        "element": Param("quad4", "element: quad4 (beam) or hex8 (beam_3d, plate)", kind="str",
+        "element": Param("quad4", "element: quad4 (beam) or hex8 (beam_3d, plate, disc, block)", kind="str",
                          choices=("quad4", "hex8")),
         "elements_along": Param(30, "FEM elements between the zone and a support (a disc: along its radius, a "
                                 "multiple of 8 puts a node ring on the rod's edge)", kind="int", low=2),
