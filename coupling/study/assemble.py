@@ -36,7 +36,7 @@ from ..participants.coupled import coupled_simulation
 from ..participants.dem import dem_only, hold_symmetry_planes
 from ..participants.fem import cohesive_node_bonds, cohesive_penalty, energies_with, fem_only, make_region
 from .schema import section
-from .selectors import footprint
+from .selectors import footprint, whole_spacings
 
 
 @dataclass
@@ -575,16 +575,12 @@ def _particle_impactor(p: dict, name: str, built: Built) -> ParticleImpactor:
 def plate(study, p: dict, mode: str, dem: str):
     """(Simulation, Built) of a quarter of a rectangular laminated plate (symmetry planes x = 0
     and y = 0, the thickness along z) under an impactor (a sphere or a flat-faced rod) or a
-    pressure history on a disc (study/pressure.py) at its centre, supported at its edges; the zone a column through the thickness whose footprint
-    zone.shape selects (study/selectors.py)."""
+    pressure history on a disc (study/pressure.py) at its centre, supported at its edges; the
+    zone a column through the thickness whose footprint zone.shape selects (study/selectors.py)."""
     built = body_of(p, mode)
     d, t_end = built.t, study.t_end
     a2, b2 = 0.5 * p["geometry.span"], 0.5 * p["geometry.width"]
-    for key, length in (("geometry.span", 2 * a2), ("geometry.width", 2 * b2)):
-        m = 0.5 * length / d
-        if abs(m - round(m)) > 1e-6:
-            raise CaseError(f"{key} = {p[key]:g}: its half must be a whole number of particle spacings ({d:g} m); "
-                            f"allowed e.g. {2 * max(1, round(m)) * d:g} m")
+    whole_spacings(p, d)
     from .bonded import load_curve
     from .pressure import fem_pressure, particle_pressure  # (they import the disc, which imports this)
     fp = footprint(study, p, built)

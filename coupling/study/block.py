@@ -36,7 +36,7 @@ from .assemble import Built, Laminate, _fem_striker, _particle_striker, _plate_a
 from .bonded import load_curve
 from .pressure import fem_pressure, particle_pressure
 from .schema import section
-from .selectors import footprint
+from .selectors import footprint, whole_spacings
 
 
 def body(p: dict) -> Laminate:
@@ -63,11 +63,7 @@ def block(study, p: dict, mode: str, dem: str):
     d = lam.ply_thickness
     built = Built(p, mode, lam, 0.5 * p["geometry.span"], d, 4.0, dim=3)
     a2, b2 = 0.5 * p["geometry.span"], 0.5 * p["geometry.width"]
-    for key, length in (("geometry.span", 2 * a2), ("geometry.width", 2 * b2)):
-        m = 0.5 * length / d
-        if abs(m - round(m)) > 1e-6:
-            raise CaseError(f"{key} = {p[key]:g}: its half must be a whole number of particle spacings ({d:g} m); "
-                            f"allowed e.g. {2 * max(1, round(m)) * d:g} m")
+    whole_spacings(p, d)
     (support,) = study.layout.names["supports"]
     fixed = p[f"supports.{support}.condition"] == "fixed"
     named = _named(p, support)

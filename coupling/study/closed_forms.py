@@ -80,23 +80,14 @@ def plate_contact_radius(study, p: dict) -> float:
     (3 F R / (4 E*))^(1/3) at the bending spring-mass peak force F = v sqrt(k M),
     E* = E22 / (1 - nu23^2) (the laminate's through-thickness stiffness against a rigid ball)."""
     from .assemble import laminate
-    if not study.layout.names["impactors"]:  # a pressure load's disc
-        (load,) = study.layout.names["loads"]
-        return p[f"loads.{load}.radius"]
-    (name,) = study.layout.names["impactors"]
-    q = section(p, f"impactors.{name}")
-    if study.layout.names["impactors"][name] == "rod":
-        return q["radius"]
-    force = q["velocity"] * np.sqrt(plate_stiffness(p) * impactor_mass(study, p))
     ply = laminate(p, p["geometry.laminate"]).ply
-    return float(np.cbrt(3 * force * q["radius"] * (1 - ply["nu23"] ** 2) / (4 * ply["E22"])))
+    return _contact_radius(study, p, ply["E22"] / (1 - ply["nu23"] ** 2),
+                           lambda q: q["velocity"] * np.sqrt(plate_stiffness(p) * impactor_mass(study, p)))
 
 
-def block_contact_radius(study, p: dict) -> float:
-    """A block's impactor's contact radius (m): a rod's face; a sphere's Hertz radius
-    (3 F R / (4 E*))^(1/3) at Hertz's peak impact force on a half-space,
-    F = (5 M v^2 / 4)^(3/5) (4 E* sqrt(R) / 3)^(2/5), E* = E / (1 - nu^2) (a rigid ball); or
-    a pressure load's disc."""
+def _contact_radius(study, p: dict, E_star: float, peak_force) -> float:
+    """m: a pressure load's disc, a rod's face, or a sphere's Hertz radius (3 F R / (4 E*))^(1/3)
+    at the peak force peak_force(its fields) against a body of contact modulus E_star Pa."""
     if not study.layout.names["impactors"]:
         (load,) = study.layout.names["loads"]
         return p[f"loads.{load}.radius"]
@@ -104,10 +95,18 @@ def block_contact_radius(study, p: dict) -> float:
     q = section(p, f"impactors.{name}")
     if study.layout.names["impactors"][name] == "rod":
         return q["radius"]
+    return float(np.cbrt(3 * peak_force(q) * q["radius"] / (4 * E_star)))
+
+
+def block_contact_radius(study, p: dict) -> float:
+    """A block's impactor's contact radius (m): a rod's face; a sphere's Hertz radius
+    (3 F R / (4 E*))^(1/3) at Hertz's peak impact force on a half-space,
+    F = (5 M v^2 / 4)^(3/5) (4 E* sqrt(R) / 3)^(2/5), E* = E / (1 - nu^2) (a rigid ball); or
+    a pressure load's disc."""
     m = section(p, f"materials.{p['geometry.material']}")
     E_star = m["E"] / (1 - m["nu"] ** 2)
-    force = (1.25 * q["mass"] * q["velocity"] ** 2) ** 0.6 * (4 / 3 * E_star * np.sqrt(q["radius"])) ** 0.4
-    return float(np.cbrt(3 * force * q["radius"] / (4 * E_star)))
+    return _contact_radius(study, p, E_star, lambda q: (1.25 * q["mass"] * q["velocity"] ** 2) ** 0.6
+                           * (4 / 3 * E_star * np.sqrt(q["radius"])) ** 0.4)
 
 
 def block_spring_mass(study, p: dict, f: dict | None = None) -> float:

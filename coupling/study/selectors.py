@@ -54,6 +54,15 @@ class Footprint:
         return out
 
 
+def whole_spacings(p: dict, d: float) -> None:
+    """A quarter model's half span and half width must be whole particle spacings d (m)."""
+    for key in ("geometry.span", "geometry.width"):
+        m = 0.5 * p[key] / d
+        if abs(m - round(m)) > 1e-6:
+            raise CaseError(f"{key} = {p[key]:g}: its half must be a whole number of particle spacings ({d:g} m); "
+                            f"allowed e.g. {2 * max(1, round(m)) * d:g} m")
+
+
 def footprint(study, p: dict, built) -> Footprint:
     """The zone's footprint from zone.shape and its keys; CaseError (one line) when it does not
     fit the plate or does not hold the impactor's face."""
