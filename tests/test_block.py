@@ -43,7 +43,8 @@ def test_a_block_meshed_by_gmsh_holds_boussinesq(femdem, mode, dem):
     volume "alumina" the body, its surface "floor" the support; elements graded to the sides and
     the floor, 1 mm cells under the zone): the same check (measured: all-FEM +6 %, coupled
     +12 %), the ledger closed."""
-    code, s, err = femdem("run", str(GMSH), "--mode", mode, *(["--dem", dem] if dem else []))
+    code, s, err = femdem("run", str(GMSH), "--mode", mode, *(["--dem", dem] if dem else []),
+                          "--set", "clock.t_end=16e-6")  # (past the peak, at 11 us)
     assert code == 0, err
     assert_checks(s)
 
@@ -102,10 +103,10 @@ def test_a_block_that_cannot_be_built_is_refused_in_one_line(femdem, tmp_path, e
     assert not (tmp_path / "run0").exists()
 
 
-@pytest.mark.parametrize("mode, dem", [("fem", None),
-                                       *[pytest.param(m, e, marks=pytest.mark.slow)
-                                         for m, e in [("coupled", "liggghts"), ("dem", "liggghts"),
+@pytest.mark.parametrize("mode, dem", [*[pytest.param(m, e, marks=pytest.mark.slow)  # (the suite: the load's
+                                         for m, e in [("fem", None), ("coupled", "liggghts"), ("dem", "liggghts"),
                                                       ("coupled", "lammps"), ("coupled", "yade")]]])
+# shares, test_the_pressure_disc_is_applied_whole_in_every_mode; a coupled block, the Gmsh one)
 def test_a_block_under_a_pressure_history_holds_boussinesq(femdem, mode, dem):
     """tests/studies/pressed_block.toml: a load by selector with a table for its history (a
     pressure disc on the top face, a slow ramp): the disc's centre against the half-space's
@@ -139,8 +140,8 @@ def test_the_pressure_disc_is_applied_whole_in_every_mode(study, mode, zone):
         assert on_fem < -0.02 and on_particles < -0.02  # split between both
 
 
-@pytest.mark.parametrize("mode, dem", [("fem", None), *[pytest.param("coupled", e, marks=pytest.mark.slow)
-                                                        for e in ENGINES]])
+@pytest.mark.parametrize("mode, dem", [pytest.param("fem", None, marks=pytest.mark.slow),
+                                       *[pytest.param("coupled", e, marks=pytest.mark.slow) for e in ENGINES]])
 def test_a_plate_under_a_pressure_history_holds_its_static_bracket(femdem, mode, dem):
     """tests/studies/pressed_plate.toml: the clamped plate under a smooth pressure ramp on a
     central disc against the quasi-static bracket (point-load bending, alone and with Mindlin's

@@ -189,6 +189,34 @@ def test_brittle_bond_breaks_at_its_strength(engine):
         eng.finalize()
 
 
+@pytest.mark.parametrize("engine", ENGINES)
+def test_prescriptions_of_a_particle_add_up(engine):
+    """A particle on a symmetry plane (x held) and on a support (z held) keeps both: pulled by a
+    bond along x, y and z, only y moves, on every engine (YADE replaced the first prescription
+    by the second until session 21)."""
+    from dem_region.backends import make_backend
+    from dem_region.scene import DemScene
+    r = 1e-3
+    x = np.array([[0, 0, 0], [2 * r, 2 * r, 2 * r]], float)
+    scene = DemScene(x, r, 2000.0, np.array([[0, 1]]), kn=1e6, ks=0.0)
+    eng = make_backend(engine)
+    try:
+        eng.build(scene)
+        eng.set_dt(0.2 * eng.critical_dt())
+        eng.prescribe(np.array([0]), "x")
+        eng.prescribe(np.array([0]), "z")
+        eng.set_velocities(np.array([0]), np.zeros((1, 3)))
+        eng.set_velocities(np.array([1]), np.array([[1.0, 1.0, 1.0]]))  # stretches the bond
+        hook = lambda: None
+        eng.start(hook)
+        for _ in range(50):
+            eng.advance(hook)
+        moved = eng.positions_of(np.array([0]))[0] - x[0]
+        assert abs(moved[0]) < 1e-15 and abs(moved[2]) < 1e-15 and abs(moved[1]) > 1e-9, moved
+    finally:
+        eng.finalize()
+
+
 def test_lammps_runs_only_in_its_worker(femdem):
     code, s, err = femdem("run", "chain_consistency", "--dem", "lammps", "--set", "dem.process=in-process")
     assert code == 2 and "worker" in err

@@ -172,10 +172,13 @@ class YadeBackend:
             self.O.engines[2].avoidSelfInteractionMask = 2
         self._partial = getattr(self, "_partial", {})
         blocked = dofs + ("XYZ" if dofs == "xyz" else ("zXY" if self.scene.plane else ""))
-        for i in ids.tolist():
-            self._states[i].blockedDOFs = "".join(sorted(set(blocked), key=blocked.index))
-            if dofs != "xyz":
-                self._partial[i] = ["xyz".index(c) for c in dofs]
+        for i in ids.tolist():  # a particle's prescriptions add up (a symmetry plane and a support)
+            both = self._states[i].blockedDOFs + blocked
+            self._states[i].blockedDOFs = "".join(sorted(set(both), key=both.index))
+            if dofs == "xyz":
+                self._partial.pop(i, None)
+            elif i not in self.prescribed:
+                self._partial[i] = sorted(set(self._partial.get(i, [])) | {"xyz".index(c) for c in dofs})
 
     def set_velocities(self, ids: np.ndarray, v: np.ndarray) -> None:
         V3, states, partial = self.yade.Vector3, self._states, getattr(self, "_partial", {})
