@@ -35,9 +35,8 @@ def test_a_block_under_a_flat_punch_holds_boussinesq(femdem, mode, dem, floor):
     assert_checks(s)
 
 
-@pytest.mark.parametrize("mode, dem", [("coupled", "liggghts"),
-                                       *[pytest.param(m, e, marks=pytest.mark.slow)
-                                         for m, e in [("fem", None), ("coupled", "lammps"), ("coupled", "yade")]]])
+@pytest.mark.parametrize("mode, dem", [("fem", None),  # (the suite's budget: coupled with -m slow)
+                                       *[pytest.param("coupled", e, marks=pytest.mark.slow) for e in ENGINES]])
 def test_a_block_meshed_by_gmsh_holds_boussinesq(femdem, mode, dem):
     """tests/studies/gmsh_block.toml: the punched block's FEM from a Gmsh file (its physical
     volume "alumina" the body, its surface "floor" the support; elements graded to the sides and

@@ -128,7 +128,9 @@ def _assert_placed_zone_gives_all_dem(coupled, dem, H=2.4e-3):
         assert debonded[0] == debonded[1], (coupled, dem)
 
 
-# the default suite runs the seed's impact alone (the suite's budget); -m slow samples the ranges
+# -m slow: the seed's impact (25 s; the default suite's budget: its decisions are tested above on
+# made-up estimates), and the ranges below
+@pytest.mark.slow
 @settings(max_examples=1, deadline=None, phases=[Phase.explicit],
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(**BEAM)

@@ -66,7 +66,8 @@ class Study:
         for name_, kind in self.layout.names["supports"].items():
             if kind != at:
                 raise CaseError(f"supports.{name_}.at = {kind!r}: geometry.shape = {shape!r} is supported at its {at}")
-        shapes = {"plate": ("sphere", "rod"), "block": ("sphere", "rod"), "disc": ("rod",), "bonded_beam": (), "bonded_beam_3d": (), "panel": (),
+        shapes = {"plate": ("sphere", "rod"), "block": ("sphere", "rod"), "disc": ("rod",), "bonded_beam": (),
+                  "bonded_beam_3d": (), "panel": (),
                   "beam": ("cylinder", "flat_punch")}.get(shape, ("cylinder",))
         for name_, kind in self.layout.names["impactors"].items():
             if kind not in shapes:

@@ -22,10 +22,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from dem_region import ply_block, ply_lattice
+from dem_region import ply_block
 from fem_region import mesh
 from fem_region.explicit import ExplicitDynamics, PrescribedMotion
-from physics.failure import HoffmanStrengths
 from physics.law_bonds import LawBonds
 
 from ..params import CaseError
@@ -83,9 +82,7 @@ def block(study, p: dict, mode: str, dem: str):
     tied = mode == "coupled"
     n = int(round(fp.w / d)) + 1 if tied else None
     nx, ny = (n, n) if tied else (int(round(a2 / d)) + 1, int(round(b2 / d)) + 1)
-    mat = ply_lattice.PlyMaterial(lam.ply["E11"], lam.ply["E22"], lam.ply["G12"], lam.ply["G23"], lam.ply["rho"],
-                                  _strengths(lam.ply), lam.ply["Gf_fibre"], lam.ply["Gf_matrix"])
-    lattice = ply_block.build((0.0, 0.0, 0.0), (nx, ny), lam.plies, [0.0], d, mat,
+    lattice = ply_block.build((0.0, 0.0, 0.0), (nx, ny), lam.plies, [0.0], d, lam.material(),
                               half_planes=[] if tied else [(0, 0), (1, 0), (0, nx - 1), (1, ny - 1)])
     if tied:
         cells = fp.cells(d)
@@ -132,8 +129,8 @@ def block(study, p: dict, mode: str, dem: str):
 
 def _hold(backend, i: np.ndarray, j: np.ndarray, k: np.ndarray, held: np.ndarray, fixed: bool) -> None:
     """The symmetry planes (x on i == 0, y on j == 0) and the floor under the bottom row (every
-    DOF, or z on a sliding floor), one prescription per particle with all its DOFs (an engine
-    takes a particle's last prescription); ``held``: particles the tie or a clamp drives."""
+    DOF, or z on a sliding floor), one prescription per particle with all its DOFs; ``held``:
+    particles the tie drives."""
     dofs = np.char.add(np.char.add(np.where(i == 0, "x", ""), np.where(j == 0, "y", "")),
                        np.where(k == 0, "z", ""))
     dofs = np.where((k == 0) & fixed, "xyz", dofs)
@@ -144,11 +141,6 @@ def _hold(backend, i: np.ndarray, j: np.ndarray, k: np.ndarray, held: np.ndarray
         if ids.size:
             backend.prescribe(ids, kind)
             backend.set_velocities(ids, np.zeros((ids.size, 3)))
-
-
-def _strengths(ply: dict) -> HoffmanStrengths:
-    return HoffmanStrengths(Xt=ply["Xt"], Xc=ply["Xc"], Yt=ply["Yt"], Yc=ply["Yc"], Zt=ply["Yt"], Zc=ply["Yc"],
-                            S23=ply["S23"], S13=ply["S12"], S12=ply["S12"])
 
 
 def _fem_block(p: dict, lam: Laminate, fp, hole: bool):

@@ -4,19 +4,19 @@ The zone is a column through the whole thickness. Its footprint, in the quarter 
 
 - ``box``: |x|, |y| <= zone.half_width (whole particle spacings);
 - ``cylinder``: x^2 + y^2 <= zone.half_width^2;
-- ``impactor``: a cylinder about the impactor's axis of its contact radius (a sphere's Hertz
-  radius at the spring-mass peak force, a rod's face; closed_forms.plate_contact_radius) plus
-  zone.margin (0: the laminate's
-  thickness or four particle sizes, the larger: a contact's stress field decays over about
-  the thickness, Saint-Venant).
+- ``impactor``: a cylinder about the impactor's axis of its contact radius (a rod's face, a
+  sphere's Hertz radius at its peak force, a pressure load's disc;
+  closed_forms.plate_contact_radius and block_contact_radius) plus zone.margin (0: a plate's
+  thickness, a block's contact radius, or four particle sizes, the larger: a contact's stress
+  field decays over about a plate's thickness, Saint-Venant, and over a few contact radii in a
+  half-space).
 
 The FEM over the zone's bounding square [0, w]^2 has mesh.elements_width equal elements per
 side; a cylinder's square is rounded up so that each element holds whole particle cells (a
 mesh file's elements there must be the cells themselves). An element whose centre the
-footprint holds is the zone's: its cells are particles
-(ply_block.carve), the rest FEM. The tie is on the particles between the zone's cells and
-the FEM's: a staircase of element faces, exact for the kinematic tie (the particles lie on
-the faces).
+footprint holds is the zone's: its cells are particles (ply_block.carve), the rest FEM. The
+tie is on the particles between the zone's cells and the FEM's: a staircase of element faces
+(the particles lie on them, so the kinematic tie holds them exactly).
 """
 from __future__ import annotations
 
