@@ -131,6 +131,7 @@ def _delamination_sets(case, material, crack):
             f"--set=interface.GIc={GIc}", f"--set=interface.GIIc={1.8 * GIc}", f"--set=geometry.crack_length={crack}"]
 
 
+@pytest.mark.slow  # (25 s; the default suite's budget: test_delamination_specimens_never_resonate samples it too)
 def test_another_dcb_runs_with_the_automatic_substeps(femdem):
     """The DCB with another material and crack length that stopped on the resonance guard
     with the automatic substep count (issue #21): it runs to its end, energy balanced."""
