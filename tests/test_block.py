@@ -5,6 +5,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from conftest import assert_checks
 
@@ -147,5 +149,25 @@ def test_a_plate_under_a_pressure_history_holds_its_static_bracket(femdem, mode,
     shear about the disc; measured: all-FEM +7 %, coupled +10 % above its shear side, which the
     15 % covers), the ledger closed."""
     code, s, err = femdem("run", str(PRESSED_PLATE), "--mode", mode, *(["--dem", dem] if dem else []))
+    assert code == 0, err
+    assert_checks(s)
+
+
+@pytest.mark.slow
+@settings(max_examples=4, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(E=st.floats(30e9, 400e9), nu=st.floats(0.15, 0.3), velocity=st.floats(0.05, 0.2), length=st.floats(0.2, 0.9),
+       coupled=st.booleans())
+def test_the_punched_block_holds_boussinesq_for_other_materials_and_impacts(femdem, E, nu, velocity, length,
+                                                                             coupled):
+    """The Gmsh block under its punch with another modulus, Poisson ratio, speed and punch mass
+    (the penalty about E / d, as in the file): the check against Boussinesq holds (15 %), the
+    ledger closed; the contact lasts pi sqrt(M / k), so the run is cut to past the peak."""
+    k = 2 * E * 3e-3 / (1 - nu**2)
+    mass = 7850.0 * np.pi * 3e-3**2 * length
+    t_peak = 0.5 * np.pi * np.sqrt(mass / k)
+    code, s, err = femdem("run", str(GMSH), "--mode", "coupled" if coupled else "fem",
+                          f"--set=materials.alumina.E={E}", f"--set=materials.alumina.nu={nu}",
+                          f"--set=impactors.punch.velocity={velocity}", f"--set=impactors.punch.length={length}",
+                          f"--set=impactors.punch.penalty={E / 1e-3}", f"--set=clock.t_end={1.5 * t_peak}")
     assert code == 0, err
     assert_checks(s)
