@@ -36,7 +36,7 @@ from ..participants.coupled import coupled_simulation
 from ..participants.dem import dem_only, hold_symmetry_planes
 from ..participants.fem import cohesive_node_bonds, cohesive_penalty, energies_with, fem_only, make_region
 from .schema import section
-from .selectors import footprint, whole_spacings
+from .selectors import footprint, tie_particles, whole_spacings
 
 
 @dataclass
@@ -604,10 +604,7 @@ def plate(study, p: dict, mode: str, dem: str):
         cells = fp.cells(d)
         block, intra, inter = _block_with_laws(built, (nx, ny), [], cells=cells)
         i, j = block.index[:, 0], block.index[:, 1]
-        fem_cell = ~cells
-        fem_cell[0, :] = fem_cell[:, 0] = False  # beyond the symmetry planes: no FEM
-        on_fem = fem_cell[i, j] | fem_cell[i + 1, j] | fem_cell[i, j + 1] | fem_cell[i + 1, j + 1]
-        edge = np.flatnonzero(on_fem)
+        edge = np.flatnonzero(tie_particles(cells, i, j))
         grid = np.ones((nx, ny), bool)  # particle columns, False on the tied edge (distances from it)
         grid[i[edge], j[edge]] = False
         to_edge = ndimage.distance_transform_cdt(grid, metric="chessboard")[i, j]

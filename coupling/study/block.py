@@ -35,7 +35,7 @@ from .assemble import Built, Laminate, _fem_striker, _particle_striker, _plate_a
 from .bonded import load_curve
 from .pressure import fem_pressure, particle_pressure
 from .schema import section
-from .selectors import footprint, whole_spacings
+from .selectors import footprint, tie_particles, whole_spacings
 
 
 def body(p: dict) -> Laminate:
@@ -89,9 +89,7 @@ def block(study, p: dict, mode: str, dem: str):
         lattice, _ = ply_block.carve(lattice, cells)
     i, j, k = lattice.index.T
     if tied:  # the tie: particles on the faces between the zone's cells and the FEM's
-        fem_cell = ~cells
-        fem_cell[0, :] = fem_cell[:, 0] = False  # beyond the symmetry planes: no FEM
-        held = np.flatnonzero(fem_cell[i, j] | fem_cell[i + 1, j] | fem_cell[i, j + 1] | fem_cell[i + 1, j + 1])
+        held = np.flatnonzero(tie_particles(cells, i, j))
         groups = {"interface": held}
     else:  # the floor: prescribed below (a clamp on every DOF would be the engine's fixed group)
         held, groups = np.zeros(0, int), {}

@@ -54,6 +54,15 @@ class Footprint:
         return out
 
 
+def tie_particles(cells: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """(n,) bool: the particles at columns (i, j) that touch both the zone's cells and the FEM's
+    (a padded cell mask of ply_block.carve; the cells beyond the symmetry planes are neither):
+    those the tie holds."""
+    fem = ~cells
+    fem[0, :] = fem[:, 0] = False
+    return fem[i, j] | fem[i + 1, j] | fem[i, j + 1] | fem[i + 1, j + 1]
+
+
 def whole_spacings(p: dict, d: float) -> None:
     """A quarter model's half span and half width must be whole particle spacings d (m)."""
     for key in ("geometry.span", "geometry.width"):
