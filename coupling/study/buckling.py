@@ -100,13 +100,18 @@ def film_critical_strain(P: np.ndarray, w_open: np.ndarray, eps_film: np.ndarray
     compression it carries once buckled, from the sample where its opening first exceeds its
     thickness h (past the dynamic overshoot of the snap) to the panel's limit load. An
     elastica's membrane force is lowest, at its critical value, just after buckling and rises
-    slowly in post-buckling (and as the panel bends); nan if the film never opened that far.
-    end: the last sample to read (before the delamination grows: a longer film is softer)."""
+    slowly in post-buckling (and as the panel bends). end: the last sample to read (before the
+    delamination grows: a longer film is softer). A thick film may start to grow before it has
+    opened by h (Hutchinson & Suo's onset within about half its critical stress): it is then
+    read as its largest compression before ``end``, provided that is a maximum the film passed
+    through (it buckled), not the last sample read. nan if the film did not buckle."""
     grown = np.flatnonzero(np.abs(w_open - w_open[0]) > h)
     end = int(np.argmax(P)) if end is None else min(end, int(np.argmax(P)))
-    if not grown.size or grown[0] >= end:
-        return float("nan")
-    return float(-np.max(eps_film[grown[0]:end + 1]))
+    if grown.size and grown[0] < end:
+        return float(-np.max(eps_film[grown[0]:end + 1]))
+    # (eps_film < 0 in compression) the peak compression, if the film came back from it
+    k = int(np.argmin(eps_film[:end + 1])) if end >= 0 else 0
+    return float(-eps_film[k]) if 0 < k < end and eps_film[end] > eps_film[k] * (1 - 1e-3) else float("nan")
 
 
 def base_strain(P: float, E: float, H: float, h: float, b: float, eps_c: float) -> float:
@@ -130,3 +135,16 @@ def growth_onset_load(E: float, b: float, H: float, h: float, eps_c: float, Gc: 
     s_c = E * eps_c
     sigma = -s_c + np.sqrt(4 * s_c**2 + 2 * E * Gc / h)
     return float(sigma * (H - h) * b + s_c * h * b)
+
+
+def growth_onset_on_path(E: float, b: float, H: float, h: float, eps_c: float, P: np.ndarray,
+                         Gc: np.ndarray) -> tuple[int, float]:
+    """(sample, N): the first sample of a load history P (N) at which Hutchinson & Suo's G of a
+    film buckled at eps_c reaches the toughness Gc (J/m^2) of the mode mix the tips carry at
+    that sample (nan where no bond softens), and the load there; (-1, nan) if it never does.
+    The mix moves as the panel bends (mode II while the film alone is buckled, towards mode I
+    as the base bends away from it near the limit load), so the toughness that stops growth is
+    the one of each moment, not of the sample where growth is first seen."""
+    G = np.array([hutchinson_suo(E, h, eps_c, base_strain(float(x), E, H, h, b, eps_c)) for x in P])
+    reached = np.flatnonzero(np.isfinite(Gc) & (G >= Gc))
+    return (int(reached[0]), float(P[reached[0]])) if reached.size else (-1, float("nan"))

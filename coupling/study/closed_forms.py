@@ -334,16 +334,19 @@ CLOSED_FORMS: dict[str, ClosedForm] = {
         "shear", with_qoi=True),
     "stepped_column_buckling": ClosedForm(
         "the delaminated panel's limit load: a clamped stepped column, the base alone in the middle carrying P "
-        "minus the buckled film's force (Timoshenko & Gere 2.10), with the delamination length at the limit load "
-        "when it grew (panels)", "closed_form_global", panel.stepped_column_buckling_load,
+        "minus the buckled film's force (Timoshenko & Gere 2.10); when the delamination grew before the limit load, "
+        "the bracket of its loads for the length at the limit load and the initial length (panels)",
+        "closed_form_global", panel.stepped_column_buckling_load,
         "clamped stepped column (Timoshenko & Gere 2.10): intact ends, the base sublaminate in the middle carrying "
-        "P minus the film's critical force (with the delamination length at the limit load when it grew)",
+        "P minus the film's critical force (grown before the limit load: between the lengths at the limit and at the "
+        "start)",
         with_qoi=True),
     "film_growth_onset": ClosedForm(
         "the panel load at which the delamination grows: Hutchinson & Suo's G of the film at its measured critical "
-        "strain = the B-K toughness of the measured mode mix (panels, coupled, when it grew)", "",
+        "strain first reaches the B-K toughness of the mode mix the tips carry at that moment (panels, coupled, when it "
+        "grew)", "",
         panel.growth_onset, "Hutchinson & Suo (1992): G = (h / 2E)(sigma - sigma_c)(sigma + 3 sigma_c) = Gc(B) "
-        "of the measured mode mix, sigma the base laminate's stress", with_qoi=True),
+        "of the mode mix measured at each sample, first reached; sigma the base laminate's stress", with_qoi=True),
     "within_windows": ClosedForm(
         "the delamination stopped inside the DEM windows (growth_reached_window_edge = 0), unless they reach the "
         "clamps' neighbourhood (panels, coupled, when it grew)", "", panel.window_room,

@@ -479,12 +479,13 @@ def growth_qoi(name, f, h, p) -> dict:
     out["intact_end_beyond_window"] = float(0.5 * (g.L - l) - room - d)
     new_area = b * (gl[-1] + gr[-1])
     if grown.size:
-        j = grown[0]
-        soft = np.flatnonzero(B[: j + 1] >= 0)
-        Bj = float(B[soft[-1]]) if soft.size else float("nan")
-        Gc = float(law.toughness(Bj))
-        out.update({"growth_onset_load": float(P[j]), "growth_mode_ratio": Bj, "growth_toughness": Gc,
-                    "closed_form_growth_onset_load": buckling.growth_onset_load(E, b, H, h_sub, eps_film, Gc),
+        # Hutchinson & Suo's onset on the measured path: the first sample where the film's G
+        # reaches the toughness of the mix the softening bonds carry then
+        Gc = np.where(B >= 0, law.toughness(np.clip(B, 0.0, 1.0)), np.nan)
+        i, P_onset = buckling.growth_onset_on_path(E, b, H, h_sub, eps_film, P, Gc)
+        out.update({"growth_onset_load": float(P[grown[0]]), "growth_mode_ratio": float(B[i]) if i >= 0 else float("nan"),
+                    "growth_toughness": float(Gc[i]) if i >= 0 else float("nan"),
+                    "closed_form_growth_onset_load": P_onset,
                     "dissipated_per_new_area": out["interface_dissipated"] / new_area})
     return out
 
@@ -502,11 +503,18 @@ def film_buckling_load(study, p: dict, f: dict, qoi: dict) -> float:
     return panel_of(p).loads()["local"]
 
 
-def stepped_column_buckling_load(study, p: dict, f: dict, qoi: dict) -> float:
-    """N, the delaminated panel's limit load (buckling.panel_loads' global), with the
-    delamination length at the limit load when it grew (coupled)."""
+def stepped_column_buckling_load(study, p: dict, f: dict, qoi: dict) -> float | tuple[float, float]:
+    """N, the delaminated panel's limit load (buckling.panel_loads' global). When the
+    delamination grew before the limit load (coupled), the bracket of the stepped column's loads
+    for its length at the limit load and its initial length: a delamination still running at
+    the limit leaves the panel above the column load of its current length (it has not yet
+    bowed out to it; the load falls to it once the tips stop), one that stopped before leaves it
+    at or below (an imperfect column)."""
     g = panel_of(p)
-    return g.loads(qoi.get("delamination_length_at_limit_load"))["global"]
+    l_limit = qoi.get("delamination_length_at_limit_load", g.l)
+    if l_limit > g.l:
+        return g.loads(l_limit)["global"], g.loads()["global"]
+    return g.loads()["global"]
 
 
 def growth_onset(study, p: dict, f: dict, qoi: dict) -> float | None:
