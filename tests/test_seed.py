@@ -533,6 +533,20 @@ def test_beam_impact_coupled_equals_fem_over_ply_materials(femdem, E11, E22, G12
     assert abs(peaks["coupled"] / peaks["fem"] - 1) < 0.03, peaks
 
 
+@pytest.mark.slow
+@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(dem=st.sampled_from(["liggghts", "lammps", "yade"]), **PLY_RANGES)
+def test_beam_impact_checks_hold_over_ply_materials(femdem, dem, E11, E22, G12, nu12, rho):
+    """Seed 5.1 with damage, coupled, with another ply inside the verified material ranges
+    (cases/seed/beam_impact.toml [ranges]) on the three engines: its checks (the ledger closes;
+    the peak deflection near the spring-mass estimate of this ply) pass (issue #22)."""
+    mats = [f"--set=materials.graphite_epoxy.{k}={v}" for k, v in
+            dict(E11=E11, E22=E22, G12=G12, G23=E22 / 2.8, nu12=nu12, rho=rho).items()]
+    code, s, err = femdem("run", "beam_impact_coarse", "--dem", dem, *mats)
+    assert code == 0, err
+    assert_checks(s)
+
+
 COHESIVE = ["--set=laminates.beam.far_field_interfaces=cohesive"]
 
 

@@ -86,7 +86,8 @@ PANEL = ROOT / "cases" / "seed" / "panel_buckling_coarse.toml"
     ("condition = ", 'condition = "simply_supported"', ["supports.ends.condition", "clamped"]),
     ("layup = ", 'layup = "[0_20]"\nfar_field_interfaces = "cohesive"', ["far_field_interfaces", "no effect"]),
     ("E11 = ", "E11 = 139.2e9\nXt = 1.5e9", ["materials.table2.Xt", "unknown key"]),
-    ("sublaminate_plies = ", "sublaminate_plies = 20", ["sublaminate_plies = 20", "below"]),
+    ("sublaminate_plies = ", "sublaminate_plies = 20", ["sublaminate_plies = 20", "<= 5"]),  # [ranges]
+    ("layup = ", 'layup = "[0_4]"', ["sublaminate_plies = 4", "below"]),
 ])
 def test_a_bad_panel_is_refused_in_one_line(tmp_path, old, new, words):
     """The panel study's own tables: a run that lasts its load, fem and coupled modes, one
