@@ -121,3 +121,16 @@ def test_cracking_onset_over_its_ranges_on_every_engine(femdem, dem, E, Gf, E11,
                           *[f"--set={k}={v!r}" for k, v in values.items()])
     assert code == 0, err
     assert s["checks"]["energy_balance"]["passed"] and s["checks"]["crack_onset_time"]["passed"], (values, s["checks"])
+
+
+@pytest.mark.slow
+@settings(max_examples=3, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(dem=st.sampled_from(["liggghts", "lammps", "yade"]), **{k.split(".")[-1]: _draw(k) for k in RANGES})
+def test_the_3d_beam_cracks_on_time_over_the_same_ranges(femdem, dem, E, Gf, E11, thickness, ft, scale):
+    """The 3D quarter beam (cfrp_beam_impact_3d_coarse, whose [ranges] are the 2D case's) over
+    the same draws: the crack-onset check and the ledger hold on the three engines (-m slow)."""
+    values = dict(zip(RANGES, (E, Gf, E11, thickness, ft, scale)))
+    code, s, err = femdem("run", "cfrp_beam_impact_3d_coarse", "--dem", dem, "--set=clock.t_end=0.45e-3",
+                          *[f"--set={k}={v!r}" for k, v in values.items()])
+    assert code == 0, err
+    assert s["checks"]["energy_balance"]["passed"] and s["checks"]["crack_onset_time"]["passed"], (values, s["checks"])
