@@ -60,22 +60,24 @@ class TransitionInterface:
     @staticmethod
     def _host_one(basis, region: FemRegion, pt: np.ndarray, pid: int, tol: float) -> sp.csr_matrix:
         """Weights of one point; a point on the mesh boundary that the element finder rejects by
-        round-off is moved 1e-9 element sizes towards the nearest element centre."""
+        round-off is moved 1e-9 element sizes towards the centre of one of the nearest elements
+        (the nearest centre may lie across a hole whose edge the point is on: up to eight are
+        tried, nearest first)."""
         try:
             return basis.probes(pt[:, None])
         except ValueError:
             pass
         centres = region.X[region.mesh.t.T].mean(axis=1)
-        e = int(np.argmin(np.sum((centres - pt) ** 2, axis=1)))
-        size = np.ptp(region.X[region.mesh.t[:, e]], axis=0).max()
-        step = centres[e] - pt
-        dist = np.linalg.norm(step)
-        if dist > 0:
-            nudged = pt + step / dist * min(1e-9 * size, dist)
-            try:
-                return basis.probes(nudged[:, None])
-            except ValueError:
-                pass
+        for e in np.argsort(np.sum((centres - pt) ** 2, axis=1))[:8]:
+            size = np.ptp(region.X[region.mesh.t[:, e]], axis=0).max()
+            step = centres[e] - pt
+            dist = np.linalg.norm(step)
+            if dist > 0:
+                nudged = pt + step / dist * min(1e-9 * size, dist)
+                try:
+                    return basis.probes(nudged[:, None])
+                except ValueError:
+                    pass
         raise InterfaceError(f"interface particle {pid} at {pt} lies outside the FEM mesh; allowed: particles "
                              "inside or on the boundary of the FEM region")
 

@@ -97,6 +97,19 @@ def test_interface_particle_outside_mesh_is_refused():
         TransitionInterface.build(r, x, np.zeros(0, int))
 
 
+@pytest.mark.parametrize("eps", [1e-15, 1e-12])
+def test_a_particle_on_the_edge_of_a_hole_is_hosted(eps):
+    """A particle on the edge of a hole in the FEM (a DEM window's), outside it by round-off,
+    whose nearest element centre lies across the hole: hosted by the element it touches, with
+    the weights that reproduce its position (the panel's 3-ply window edge was refused)."""
+    from fem_region import mesh
+    m = mesh.cut_rectangle([0, 1, 2], [0, 0.1, 1.1], lambda cx, cy: not (cx < 1 and cy > 0.1))
+    r = FemRegion(m, ELEMENTS["quad4"], materials.plane_strain(materials.isotropic(1e9, 0.3)), 1000.0, 1.0)
+    x = np.array([[1 - eps, 0.2, 0.0]])
+    itf = TransitionInterface.build(r, x, np.arange(1))
+    assert itf.to_particles(r.X)[0, :2] == pytest.approx([1.0, 0.2], abs=1e-8)
+
+
 def test_coupled_free_flight_momentum(femdem):
     code, s, _ = femdem("run", "coupled_free_flight")
     assert code == 0

@@ -376,6 +376,7 @@ def test_panel_buckling_fem_over_its_geometry(femdem, E11, length, plies):
 @settings(max_examples=3, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @example(dem="lammps", E11=180e9, length=29.6e-3, plies=5)  # the film grows as it buckles
 @example(dem="yade", E11=100e9, length=40.7e-3, plies=3)  # growth only at the limit load
+@example(dem="liggghts", E11=100e9, length=29.6e-3, plies=3)  # a window edge's particle on a hole's edge
 @given(dem=st.sampled_from(["liggghts", "lammps", "yade"]), **_panel_draw)
 def test_panel_buckling_coupled_holds_its_checks_over_its_ranges(femdem, dem, E11, length, plies):
     """Seed 5.2 coupled, with growth, over the same ranges and on the three engines (5-20
