@@ -379,8 +379,8 @@ def test_panel_buckling_fem_over_its_geometry(femdem, E11, length, plies):
 @example(dem="liggghts", E11=100e9, length=29.6e-3, plies=3)  # a window edge's particle on a hole's edge
 @given(dem=st.sampled_from(["liggghts", "lammps", "yade"]), **_panel_draw)
 def test_panel_buckling_coupled_holds_its_checks_over_its_ranges(femdem, dem, E11, length, plies):
-    """Seed 5.2 coupled, with growth, over the same ranges and on the three engines (5-20
-    minutes a draw): every check of the case holds at its tolerance (axial stiffness, the
+    """Seed 5.2 coupled, with growth, over the same ranges and on the three engines (3-8
+    minutes a draw on LIGGGHTS and LAMMPS, 50 on YADE): every check of the case holds at its tolerance (axial stiffness, the
     film's and the panel's buckling loads, Hutchinson & Suo's onset on the measured mode mix,
     dissipation between GIc and GIIc per new area), and both tips grow alike (symmetry)."""
     code, s, err = _panel_run(femdem, "coupled", E11, length, plies, "--dem", dem)
