@@ -11,16 +11,20 @@ import json
 from pathlib import Path
 
 import pytest
-from hypothesis import HealthCheck, settings
+from hypothesis import HealthCheck, Phase, settings
 
 from coupling.cli import main
 
 # The default suite draws the same examples on every machine (a CI run that fails can be run
 # again and fails the same way; a random draw once failed CI on a health check of the
 # generator, not of the code). HYPOTHESIS_PROFILE=explore draws new examples each run, to look
-# for what the fixed ones miss; a failure found there becomes an @example.
+# for what the fixed ones miss; a failure found there becomes an @example. HYPOTHESIS_PROFILE=survey
+# draws the suite's examples without shrinking a failure (each step of it reruns a simulation):
+# with pytest -rA every failing draw is reported as drawn.
 settings.register_profile("suite", derandomize=True, suppress_health_check=[HealthCheck.data_too_large])
 settings.register_profile("explore", derandomize=False, print_blob=True)
+settings.register_profile("survey", derandomize=True, suppress_health_check=[HealthCheck.data_too_large],
+                          phases=[Phase.explicit, Phase.generate], report_multiple_bugs=True)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "suite"))
 
 

@@ -9,6 +9,8 @@ specimen of each, all-FEM and coupled (derandomized: the same draw on every mach
 tests/test_damage.py runs the DCB's and SLB's defaults coupled, the ENF's with -m slow); `-m slow` draws more, at random,
 and on every engine.
 """
+import re
+
 import pytest
 from hypothesis import HealthCheck, Phase, assume, given, settings
 from hypothesis import strategies as st
@@ -17,17 +19,29 @@ from conftest import assert_checks
 
 from coupling.case import load_case
 from coupling.params import CaseError, parse_set
+from coupling.scenes import dcb, enf
 
 OUTSIDE = ("does not apply", "fewer than")  # the scene's warnings that the closed form does not hold
 
-# plies from glass/epoxy to high-modulus carbon/epoxy (the parameters' documented ranges)
+# plies from glass/epoxy to high-modulus carbon/epoxy, and every other constant of the ply, the
+# interface and the loading (the parameters' documented ranges: `femdem params dcb_coarse`)
 MATERIAL = st.fixed_dictionaries({
     "material.E11": st.floats(40e9, 200e9),
     "material.E22": st.floats(6e9, 15e9),
     "shear_fraction": st.floats(0.35, 0.7),  # G13 / E22, inside 3 to 7 GPa below
     "interface.GIc": st.floats(150.0, 2000.0),
     "mode_ratio": st.floats(1.2, 2.5),  # GIIc / GIc
+    "interface.Z0": st.floats(10e6, 150e6),
+    "interface.R0": st.floats(10e6, 200e6),
+    "interface.eta": st.floats(1.0, 4.0),
+    "interface.friction": st.floats(0.0, 1.0),
+    "material.nu12": st.floats(0.2, 0.4),
+    "material.rho": st.floats(1200.0, 2200.0),
+    "geometry.width": st.floats(5e-3, 60e-3),
+    "damping.ratio": st.floats(0.0, 0.1),
 })
+AS_DRAWN = ("interface.Z0", "interface.R0", "interface.eta", "interface.friction", "material.nu12", "material.rho",
+            "geometry.width", "damping.ratio")
 
 
 def material_sets(m: dict) -> list[str]:
@@ -36,7 +50,13 @@ def material_sets(m: dict) -> list[str]:
     GIIc = min(m["mode_ratio"] * m["interface.GIc"], 4000.0)
     return [f"--set=material.E11={m['material.E11']}", f"--set=material.E22={m['material.E22']}",
             f"--set=material.G13={G13}", f"--set=interface.GIc={m['interface.GIc']}",
-            f"--set=interface.GIIc={max(GIIc, 300.0)}"]
+            f"--set=interface.GIIc={max(GIIc, 300.0)}", *[f"--set={k}={m[k]!r}" for k in AS_DRAWN if k in m]]
+
+
+# the loading's pace: the periods before the peak (load.duration_periods / the final factor),
+# inside each specimen's quasi-static range (outside it is refused: tested below)
+DCB_PACE = st.floats(*dcb.PERIODS_TO_PEAK)
+BENDING_PACE = st.floats(*enf.PERIODS_TO_PEAK)
 
 
 def run_in_domain(femdem, case, sets):
@@ -58,16 +78,20 @@ def run_in_domain(femdem, case, sets):
 RADIUS = st.floats(0.18e-3, 0.32e-3)  # particle radius; above h / 12 it is refused (drawn again)
 
 
-def dcb_sets(m, h, a_rel, substeps, r=0.25e-3):
+def dcb_sets(m, h, a_rel, substeps, r=0.25e-3, pace=10.0 / 2.2, opening=2.2, length=0.1):
+    """pace: periods before the peak."""
     return [*material_sets(m), f"--set=zone.particle_size={2 * r}", f"--set=geometry.arm_thickness={h}", f"--set=geometry.crack_length={a_rel * 8 * h}",
-            "--set=geometry.length=0.1", f"--set=clock.substeps={substeps}"]
+            f"--set=geometry.length={length}", f"--set=clock.substeps={substeps}", f"--set=load.duration_periods={pace * opening}",
+            f"--set=load.final_opening_factor={opening}"]
 
 
-def bending_sets(m, h, L_rel, a_rel, substeps, r=0.25e-3):
+def bending_sets(m, h, L_rel, a_rel, substeps, r=0.25e-3, pace=10.0 / 1.6, overhang=0.0, deflection=1.6):
+    """pace: periods before the peak."""
     L = L_rel * 8 * h
     return [*material_sets(m), f"--set=zone.particle_size={2 * r}", f"--set=geometry.arm_thickness={h}", f"--set=geometry.half_span={L}",
-            f"--set=geometry.length={2 * L}", f"--set=geometry.crack_length={a_rel * L}",
-            f"--set=clock.substeps={substeps}"]
+            f"--set=geometry.length={(2 + overhang) * L}", f"--set=geometry.crack_length={a_rel * L}",
+            f"--set=clock.substeps={substeps}", f"--set=load.duration_periods={pace * deflection}",
+            f"--set=load.final_deflection_factor={deflection}"]
 
 
 # no shrinking in the default suite: a failure reports its draw (a run costs 10 to 30 s)
@@ -78,39 +102,46 @@ WIDE = settings(max_examples=6, deadline=None,
 THICK = st.floats(2.5e-3, 4e-3)  # the coarse variants' particles (d = 0.5 mm) need arms of 2.5 mm and more
 
 
+DCB_LOAD = dict(pace=DCB_PACE, opening=st.floats(1.2, 6.0), length=st.floats(0.06, 0.3))
+BENDING_LOAD = dict(pace=BENDING_PACE, overhang=st.floats(0.0, 0.6), deflection=st.floats(1.1, 6.0))
+
+
 @COARSE
-@given(m=MATERIAL, h=THICK, a_rel=st.floats(1.0, 1.6), substeps=st.sampled_from([0, 1, 2]), r=RADIUS)
-def test_dcb_holds_over_its_ranges(femdem, m, h, a_rel, substeps, r):
+@given(m=MATERIAL, h=THICK, a_rel=st.floats(1.0, 1.6), substeps=st.sampled_from([0, 1, 2]), r=RADIUS, **DCB_LOAD)
+def test_dcb_holds_over_its_ranges(femdem, m, h, a_rel, substeps, r, pace, opening, length):
     """DCB: peak load, initial compliance and propagation branch against corrected beam theory,
-    dissipation = GIc x crack area, for any sampled ply, arm and crack (a0 = 8 h to 13 h)."""
-    s = run_in_domain(femdem, "dcb_coarse", dcb_sets(m, h, a_rel, substeps, r))
+    dissipation = GIc x crack area, for any sampled ply, arm and crack (a0 = 8 h to 13 h), and
+    loading (its pace, its final opening, the specimen's length)."""
+    s = run_in_domain(femdem, "dcb_coarse", dcb_sets(m, h, a_rel, substeps, r, pace, opening, length))
     assert_checks(s)
     assert s["qoi"]["cohesive_zone_bonds"] >= 3  # the zone the run measured is resolved
 
 
 @COARSE
 @given(m=MATERIAL, h=THICK, L_rel=st.floats(1.2, 2.0), a_rel=st.floats(0.4, 0.6),
-       substeps=st.sampled_from([0, 1, 2]), r=RADIUS)
-def test_enf_holds_over_its_ranges(femdem, m, h, L_rel, a_rel, substeps, r):
+       substeps=st.sampled_from([0, 1, 2]), r=RADIUS, **BENDING_LOAD)
+def test_enf_holds_over_its_ranges(femdem, m, h, L_rel, a_rel, substeps, r, pace, overhang, deflection):
     """ENF: the initiation load against beam theory with the Wang & Williams correction."""
-    s = run_in_domain(femdem, "enf_coarse", bending_sets(m, h, L_rel, a_rel, substeps, r))
+    s = run_in_domain(femdem, "enf_coarse", bending_sets(m, h, L_rel, a_rel, substeps, r, pace, overhang, deflection))
     assert_checks(s)
 
 
 @pytest.mark.slow  # 39 s (the suite's budget): the SLB's defaults run in test_damage, wider draws below
 @COARSE
 @given(m=MATERIAL, h=THICK, L_rel=st.floats(1.2, 2.0), a_rel=st.floats(0.4, 0.6),
-       substeps=st.sampled_from([0, 1, 2]), r=RADIUS)
-def test_mixed_mode_holds_over_its_ranges(femdem, m, h, L_rel, a_rel, substeps, r):
+       substeps=st.sampled_from([0, 1, 2]), r=RADIUS, **BENDING_LOAD)
+def test_mixed_mode_holds_over_its_ranges(femdem, m, h, L_rel, a_rel, substeps, r, pace, overhang, deflection):
     """SLB: initiation against the B-K toughness at the beam-theory mode ratio, compliance,
     dissipation = Gc(B) x crack area."""
-    s = run_in_domain(femdem, "mixed_mode_coarse", bending_sets(m, h, L_rel, a_rel, substeps, r))
+    s = run_in_domain(femdem, "mixed_mode_coarse", bending_sets(m, h, L_rel, a_rel, substeps, r, pace, overhang,
+                                                                deflection))
     assert_checks(s)
 
 
-def fem_sets(case, m, h, L_rel, a_rel, dcb_a, r):
-    """A specimen's sets for --mode fem (no substeps: there is no DEM zone)."""
-    sets = dcb_sets(m, h, dcb_a, 0, r) if case == "dcb_coarse" else bending_sets(m, h, L_rel, a_rel, 0, r)
+def fem_sets(case, m, h, L_rel, a_rel, dcb_a, r, load=None):
+    """A specimen's sets for --mode fem (no substeps: there is no DEM zone); load: the loading's
+    draw (LOAD), or the defaults."""
+    sets = specimen_sets(case, m, h, L_rel, a_rel, dcb_a, 0, r, load)
     # the node spacing is the FEM's element length (the particles' 2 r in the coupled draws)
     sets = [a.replace("zone.particle_size", "mesh.element_length") for a in sets if "clock.substeps" not in a]
     return sets + ["--mode", "fem"]
@@ -130,12 +161,22 @@ def test_all_fem_specimens_hold_over_their_ranges(femdem, case, m, h, L_rel, a_r
     assert s["counts"]["particles"] == 0 and s["counts"]["interface_bonds"] > 0
 
 
+# the loading of either specimen kind, drawn together (each takes its own)
+LOAD = st.fixed_dictionaries({"dcb": st.fixed_dictionaries(DCB_LOAD), "bending": st.fixed_dictionaries(BENDING_LOAD)})
+
+
+def specimen_sets(case, m, h, L_rel, a_rel, dcb_a, substeps, r, load=None):
+    if case == "dcb_coarse":
+        return dcb_sets(m, h, dcb_a, substeps, r, **(load["dcb"] if load else {}))
+    return bending_sets(m, h, L_rel, a_rel, substeps, r, **(load["bending"] if load else {}))
+
+
 @pytest.mark.slow
 @WIDE
 @given(case=st.sampled_from(["dcb_coarse", "enf_coarse", "mixed_mode_coarse"]), m=MATERIAL, h=THICK,
-       L_rel=st.floats(1.2, 2.5), a_rel=st.floats(0.4, 0.6), dcb_a=st.floats(1.0, 2.0), r=RADIUS)
-def test_all_fem_specimens_hold_over_wider_draws(femdem, case, m, h, L_rel, a_rel, dcb_a, r):
-    s = run_in_domain(femdem, case, fem_sets(case, m, h, L_rel, a_rel, dcb_a, r))
+       L_rel=st.floats(1.2, 2.5), a_rel=st.floats(0.4, 0.6), dcb_a=st.floats(1.0, 2.0), r=RADIUS, load=LOAD)
+def test_all_fem_specimens_hold_over_wider_draws(femdem, case, m, h, L_rel, a_rel, dcb_a, r, load):
+    s = run_in_domain(femdem, case, fem_sets(case, m, h, L_rel, a_rel, dcb_a, r, load))
     assert_checks(s)
 
 
@@ -144,17 +185,19 @@ def test_all_fem_specimens_hold_over_wider_draws(femdem, case, m, h, L_rel, a_re
 @given(case=st.sampled_from(["dcb_coarse", "enf_coarse", "mixed_mode_coarse"]),
        engine=st.sampled_from(["liggghts", "lammps", "yade"]), m=MATERIAL, h=THICK,
        L_rel=st.floats(1.2, 2.5), a_rel=st.floats(0.4, 0.6), dcb_a=st.floats(1.0, 2.0),
-       substeps=st.sampled_from([0, 1, 3]), r=RADIUS)
-def test_delamination_specimens_hold_on_every_engine(femdem, case, engine, m, h, L_rel, a_rel, dcb_a, substeps, r):
-    sets = (dcb_sets(m, h, dcb_a, substeps, r) if case == "dcb_coarse"
-            else bending_sets(m, h, L_rel, a_rel, substeps, r))
+       substeps=st.sampled_from([0, 1, 3]), r=RADIUS, load=LOAD)
+def test_delamination_specimens_hold_on_every_engine(femdem, case, engine, m, h, L_rel, a_rel, dcb_a, substeps, r, load):
+    sets = specimen_sets(case, m, h, L_rel, a_rel, dcb_a, substeps, r, load)
     s = run_in_domain(femdem, case, [*sets, f"--dem={engine}"])
     assert_checks(s)
 
 
 @pytest.mark.parametrize("sets, key", [
     (["--set=geometry.crack_length=0.02"], "geometry.crack_length"),  # a0 < 8 h (h = 3 mm)
-    (["--set=load.final_opening_factor=4"], "load.final_opening_factor"),  # the crack would leave the specimen
+    (["--set=load.final_opening_factor=4", "--set=load.duration_periods=20"], "load.final_opening_factor"),  # the crack would leave the specimen
+    (["--set=load.final_opening_factor=1.3"], "load.final_opening_factor"),  # too little growth to measure
+    (["--set=load.duration_periods=4"], "load.duration_periods"),  # not quasi-static
+    (["--set=damping.ratio=0.3"], "damping.ratio"),  # the damping's drag is load
     (["--set=interface.GIc=150", "--set=interface.cohesive_zone_bonds=0", "--set=interface.Z0=1.5e8"],
      "interface.GIc"),  # below Z0^2 / (2 K): linear softening cannot start
     (["--set=material.E11=30e9"], "material.E11"),  # outside the verified range
@@ -170,6 +213,8 @@ def test_dcb_refuses_what_it_cannot_model(femdem, sets, key):
 @pytest.mark.parametrize("sets, key", [
     (["--set=geometry.crack_length=0.01"], "geometry.crack_length"),  # a0 < 0.3 L
     (["--set=geometry.half_span=0.06"], "geometry.half_span"),  # 2L > length
+    (["--set=geometry.length=0.15"], "geometry.length"),  # an overhang of 0.73 L
+    (["--set=load.duration_periods=30"], "load.duration_periods"),  # past the verified pace
 ])
 def test_enf_refuses_what_it_cannot_model(femdem, sets, key):
     code, s, err = femdem("run", "enf_coarse", *sets)
@@ -185,3 +230,48 @@ def test_enf_says_when_beam_theory_does_not_apply(femdem):
     assert code == 0
     assert any("beam theory's peak load (LEFM) does not apply" in w for w in s["warnings"])
     assert "femdem: warning: the mode II cohesive zone" in err
+
+
+@settings(max_examples=40, deadline=None)
+@given(m=MATERIAL, h=THICK, a_rel=st.floats(1.0, 1.6), opening=st.floats(1.2, 6.0))
+def test_a_dcb_is_refused_unless_its_crack_runs_far_enough_to_measure(m, h, a_rel, opening):
+    """The DCB's final opening: refused (naming the smallest opening allowed) exactly when beam
+    theory's final crack runs less than its cohesive zone and 6 bonds beyond a0, and accepted
+    at that smallest opening (the refusal's own bound is consistent with the rule)."""
+    from coupling.scenes import delamination as dl
+    sets = dcb_sets(m, h, a_rel, 0, 0.25e-3, pace=4.0, opening=opening, length=0.3)
+    p = load_case("dcb_coarse", parse_set([a.split("=", 1)[1] for a in sets])).parameters
+    d = p["zone.particle_size"]
+    try:
+        Z0 = dl.resolved_strengths(p, d)[0]
+    except CaseError:
+        assume(False)
+    cf = dcb.closed_form(p)
+    need = p["geometry.crack_length"] + dl.cohesive_zone_length(p, p["interface.GIc"], Z0, "I") + 6 * d
+    short = dcb.final_crack_length(p, cf) < need
+    try:
+        dcb.domain(p)
+        refused = ""
+    except CaseError as e:
+        refused = str(e)
+    assume(not refused or "too little" in refused)  # the other refusals are tested above
+    assert bool(refused) == short, refused
+    if short:
+        f_min = float(re.search(r">= ([0-9.e+-]+)$", refused).group(1))
+        p["load.final_opening_factor"] = f_min * 1.001  # the message's 3 digits
+        assert dcb.final_crack_length(p, cf) >= need * (1 - 1e-3)
+
+
+@pytest.mark.parametrize("case, sets, says", [
+    ("dcb_coarse", ["interface.Z0=12e6"], "the mode I cohesive zone"),
+    ("dcb_coarse", ["interface.cohesive_zone_bonds=0"], "spans fewer than 8 bonds"),
+    ("mixed_mode_coarse", ["interface.R0=20e6"], "the mode II cohesive zone"),
+])
+def test_specimens_say_when_their_closed_form_does_not_hold(case, sets, says):
+    """Where the coupled specimen misses its closed form by more than the check's tolerance
+    (measured: DCB Z0 = 14 MPa, peak 8 % off; Rice zone of 2.7 bonds, 35 %; SLB R0 = 20 MPa, 18 %),
+    the scene says so before the run; at the defaults it does not."""
+    c = load_case(case, parse_set(sets))
+    assert any(says in w for w in c.scene.validity(c.parameters, "coupled"))
+    c = load_case(case, {})
+    assert not any(says in w for w in c.scene.validity(c.parameters, "coupled"))
