@@ -548,6 +548,40 @@ def test_beam_impact_checks_hold_over_ply_materials(femdem, dem, E11, E22, G12, 
     assert_checks(s)
 
 
+BEAM_RANGES = tomllib.loads((ROOT / "cases" / "seed" / "beam_impact_coarse.toml").read_text())["ranges"]
+# every verified key drawn at once; G23 follows from E22 and nu23 (a transversely isotropic ply)
+_beam_draw = {k.replace(".", "_"): st.floats(*v) for k, v in BEAM_RANGES.items() if not k.endswith(".G23")}
+
+
+def _beam_sets(draw: dict) -> list[str]:
+    values = {k: draw[k.replace(".", "_")] for k in BEAM_RANGES if not k.endswith(".G23")}
+    m = "materials.graphite_epoxy."
+    values[m + "G23"] = float(np.clip(values[m + "E22"] / (2 * (1 + values[m + "nu23"])), *BEAM_RANGES[m + "G23"]))
+    return [f"--set={k}={v!r}" for k, v in values.items()]
+
+
+@settings(max_examples=1, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.generate],
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(**_beam_draw)
+def test_beam_impact_checks_hold_anywhere_in_its_ranges(femdem, **draw):
+    """Seed 5.1 with damage, coupled, every verified key drawn at once (cases/seed/
+    beam_impact_coarse.toml [ranges]: the geometry and impact, the ply's moduli, strengths and
+    fracture energies, the interface's strengths, toughnesses and friction, the ply thickness,
+    the width, the impactor's friction): its checks hold (issue #22)."""
+    code, s, err = femdem("run", "beam_impact_coarse", *_beam_sets(draw))
+    assert code == 0, err
+    assert_checks(s)
+
+
+@pytest.mark.slow
+@settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(dem=st.sampled_from(["liggghts", "lammps", "yade"]), **_beam_draw)
+def test_beam_impact_checks_hold_anywhere_in_its_ranges_on_every_engine(femdem, dem, **draw):
+    code, s, err = femdem("run", "beam_impact_coarse", "--dem", dem, *_beam_sets(draw))
+    assert code == 0, err
+    assert_checks(s)
+
+
 COHESIVE = ["--set=laminates.beam.far_field_interfaces=cohesive"]
 
 
