@@ -455,8 +455,11 @@ def test_the_3d_beam_holds_its_bracket_anywhere_in_its_ranges(femdem, dem, **dra
     m = "materials.graphite_epoxy."
     values[m + "G23"] = float(np.clip(values[m + "E22"] / (2 * (1 + values[m + "nu23"])), *BEAM_3D_RANGES[m + "G23"]))
     t_end = 0.2e-3 * np.sqrt(values["impactors.cylinder.mass_per_width"] / 0.617 * 156e9 / values[m + "E11"])
+    # the strip's half width, 1.5 mm, in whole particle spacings (two plies each), as the case asks
+    d = 2 * values["laminates.beam.ply_thickness"]
+    width = 2 * d * max(1, round(1.5e-3 / d))
     code, s, err = femdem("run", "beam_impact_3d_coarse", "--dem", dem, *[f"--set={k}={v!r}" for k, v in values.items()],
-                          f"--set=clock.t_end={t_end}")
+                          f"--set=clock.t_end={t_end}", f"--set=geometry.width={width!r}")
     assert code == 0, err
     assert_checks(s)
 

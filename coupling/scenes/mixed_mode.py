@@ -29,12 +29,9 @@ MODES = ("coupled", "fem")
 # peak 20 % high; Z0 = R0 = 30 MPa, peak 4 % high)
 # 10 bonds in Rice's zones (the DCB's 20 lower the strengths further: the default SLB's mode II
 # zone then spans its whole ligament, peak 5.5 % low; with 10, 1.8 %)
-# Z0 from 20 MPa: drawn over the ranges, every SLB with Z0 = 10 MPa and E11 = 40 GPa missed
-# Gc(B) x area by 16-26 % (the tips' mix leaves beam theory's), and none from 13 MPa up did
-PARAMETERS = {**enf.PARAMETERS,
+PARAMETERS = {**enf.PARAMETERS,  # (Z0 from 20 MPa, as the ENF's)
               "interface.cohesive_zone_bonds": Param(10.0, dl.PARAMETERS["interface.cohesive_zone_bonds"].doc,
-                                                     low=0.0, high=50.0),
-              "interface.Z0": dl.ranged(80e6, "interlaminar normal strength", "Pa", 20e6, 150e6)}
+                                                     low=0.0, high=50.0)}
 
 
 def closed_form(p: dict) -> dict:
