@@ -25,10 +25,9 @@ from . import enf
 NAME = "mixed_mode"
 DESCRIPTION = "coupled: single leg bending, mixed-mode initiation and growth vs B-K"
 MODES = ("coupled", "fem")
-# the cohesive zone rule of the DCB (measured on mixed_mode_coarse: N = 5, Z0 = 59 / R0 = 78 MPa,
-# peak 20 % high; Z0 = R0 = 30 MPa, peak 4 % high)
-# 10 bonds in Rice's zones (the DCB's 20 lower the strengths further: the default SLB's mode II
-# zone then spans its whole ligament, peak 5.5 % low; with 10, 1.8 %)
+# 10 bonds in Rice's zones: fewer resolve the zone too coarsely (N = 5, Z0 = 59 / R0 = 78 MPa: peak
+# 20 % high), the DCB's 20 lower the strengths further (the default SLB's mode II zone then spans
+# its whole ligament: peak 5.5 % low; with 10, 1.8 %)
 PARAMETERS = {**enf.PARAMETERS,  # (Z0 from 20 MPa, as the ENF's)
               "interface.cohesive_zone_bonds": Param(10.0, dl.PARAMETERS["interface.cohesive_zone_bonds"].doc,
                                                      low=0.0, high=50.0)}
