@@ -178,6 +178,28 @@ def test_cfrp_beam_impact_coarse(femdem):
             "damage_at_zone_edge", "peak_midspan_displacement_no_fracture"} <= set(q)
     assert q["midspan_displacement_change_by_fracture"] > 0.05
     assert q["cracked_bonds"] > 0 and q["sheet_broken_bonds"] == 0  # T0 = 2.2 GPa is far off
+    # the test's own specimen: its data are compared, and nothing is off the file
+    assert {"crack_initiation_time", "debond_initiation_time", "crack_top_time", "debonded_fraction_750us"} <= set(c)
+    assert not s["warnings"], s["warnings"]
+
+
+def test_a_run_off_the_case_files_specimen_says_what_is_not_verified(femdem):
+    """A key changed outside the case's [ranges] is named as not verified, a ranged one is not;
+    test data measured on the file's specimen are not compared with another specimen (issue #22)."""
+    short = ["--mode", "fem", "--set=clock.t_end=1e-4"]
+    code, s, err = femdem("run", "cfrp_beam_impact_coarse", *short, "--set=materials.concrete.nu=0.25",
+                          "--set=materials.concrete.E=30e9")
+    assert code == 0, err
+    (loose, data) = s["warnings"]
+    assert loose.startswith("not verified: materials.concrete.nu = 0.25 (") and "concrete.E " not in loose
+    assert "crack_initiation_time" in data and "materials.concrete.E, materials.concrete.nu" in data
+    assert all(w in err for w in s["warnings"])
+    code, s, err = femdem("run", "cfrp_beam_impact_coarse", *short, "--set=materials.concrete.E=30e9",
+                          "--set=mesh.max_size=20e-3")  # a ranged key, and how rather than what is simulated
+    assert code == 0, err
+    assert len(s["warnings"]) == 1 and "not compared" in s["warnings"][0] and "mesh" not in s["warnings"][0]
+    code, s, err = femdem("run", "cfrp_beam_impact_coarse", *short, "--set=materials.concrete.E=24e9")  # the file's
+    assert code == 0 and not s["warnings"], (err, s["warnings"])
 
 
 @pytest.mark.slow  # suite budget: the 3D coupled beam runs in test_beam_impact_3d_coarse

@@ -31,6 +31,7 @@ class Study:
     def __init__(self, name: str, data: dict, where: str):
         self.NAME = name
         self.PARAMETERS, self.layout = parameters(data, where, probes.PROBES, closed_forms.CLOSED_FORMS)
+        self.ranged = frozenset(data.get("ranges", {}))  # keys whose [ranges] the tests verify
         meta = self.layout.meta
         self.DESCRIPTION = str(meta.get("description", ""))
         shape = self.PARAMETERS["geometry.shape"].default
@@ -243,10 +244,31 @@ class Study:
             self._placed[key] = estimate(self, p)
         return place(self, p, self._placed[key])
 
+    def changed(self, p: dict) -> list[str]:
+        """The keys of the specimen (its materials, geometry, loads, ...) that ``p`` sets off the
+        case file's values, sorted."""
+        return sorted(k for k, param in self.PARAMETERS.items()
+                      if k.startswith(SPECIMEN) and k in p and p[k] != param.default)
+
+    def specimen_warnings(self, p: dict) -> list[str]:
+        """What a run off the case file's specimen should know: changes outside the verified
+        [ranges] (its checks were never verified there), test data not compared."""
+        changed, out = self.changed(p), []
+        loose = [k for k in changed if k not in self.ranged]
+        if self.ranged and loose:
+            out.append(f"not verified: {', '.join(f'{k} = {p[k]!r}' for k in loose)} (off the case file's value; "
+                       "the checks are verified over the keys of its [ranges], listed by femdem params)")
+        data = [n for n, kind in self.layout.names["checks"].items() if closed_forms.CLOSED_FORMS[kind].specimen]
+        if changed and data:
+            out.append(f"checks {', '.join(data)} not compared: their test data are the case file's specimen's, and "
+                       f"this run changes {', '.join(changed)}")
+        return out
+
     def build(self, p: dict, mode: str, dem: str, start=None):
         """The Simulation of ``p`` in ``mode`` on engine ``dem``; start: the state a grown zone's
         coupled model continues from (study/growth.py), None for a run from rest."""
         sim, built = self.assemble(p, mode, dem, start)
+        sim.warnings += [w for w in self.specimen_warnings(p) if w not in sim.warnings]
         if mode == "coupled":  # (an all-FEM twin built meanwhile leaves the coupled run's record)
             self.growth = Growth(self, p, dem, built, sim) if p.get("zone.grow") else None
         return sim
@@ -309,6 +331,9 @@ FORM_NEEDS = {"block_spring_mass": ("block", "rod"), "block_pressure": ("block",
               "plate_pressure_bracket": ("plate", "pressure")}
 FORM_WORDS = {"rod": "a flat-faced rod (impactors.*.shape = 'rod')", "impactor": "an impactor",
               "pressure": "a pressure load ([loads.*] kind = 'pressure')"}
+# the tables that say what is simulated (not how: mesh, zone, fem, clock, output)
+SPECIMEN = ("materials.", "interfaces.", "laminates.", "geometry.", "impactors.", "loads.", "delaminations.",
+            "sheets.", "supports.")
 PLACEMENT_KEYS = ("zone.placement", "zone.grow_at", "zone.margin", "zone.half_width", "zone.grow", "zone.grow_to")
 
 

@@ -29,6 +29,7 @@ class ClosedForm:
     fields: dict = None  # the check's fields (default: qoi and tol)
     costly: bool = False  # computed only when the checked qoi exists (it runs a model)
     with_qoi: bool = False  # reference(study, p, fields, qoi): it reads the run's measured qoi; None: no check
+    specimen: bool = False  # data measured on the case file's specimen: compared only when the run is that specimen
 
     def __post_init__(self):
         object.__setattr__(self, "fields", dict(self.fields or _CHECK))
@@ -375,12 +376,12 @@ CLOSED_FORMS: dict[str, ClosedForm] = {
         "spring-mass estimate v sqrt(M / k), plate bending and shear in series (an estimate)"),
     "test_value": ClosedForm(
         "a value measured in a test (independent data), within tol", "", lambda study, p, f: f["value"], "",
-        {**_CHECK, "value": Param(0.0, "the measured value (SI)"), "source": _SOURCE}),
+        {**_CHECK, "value": Param(0.0, "the measured value (SI)"), "source": _SOURCE}, specimen=True),
     "test_between": ClosedForm(
         "a measured range (independent data): the qoi between low and high", "",
         lambda study, p, f: (f["low"], f["high"]), "",
         {"qoi": _CHECK["qoi"], "low": Param(0.0, "lowest value (SI)"), "high": Param(0.0, "highest value (SI)"),
-         "source": _SOURCE}),
+         "source": _SOURCE}, specimen=True),
     "beam_spring_mass_bracket": ClosedForm(
         "the peak deflection between the spring-mass estimates of the intact beam and of the beam delaminated at "
         "every interface (its runs of plies bending apart), within tol below and above",
@@ -421,10 +422,10 @@ CLOSED_FORMS: dict[str, ClosedForm] = {
 
 def evaluate(study, p: dict, qoi: dict, history: dict) -> dict:
     """The study's checks, plus the energy balance every run has; records each reference as qoi."""
-    checks = {}
+    checks, changed = {}, study.changed(p)
     for name, form_name in study.layout.names["checks"].items():
         form, f = CLOSED_FORMS[form_name], section(p, f"checks.{name}")
-        if form.costly and f["qoi"] not in qoi:
+        if form.costly and f["qoi"] not in qoi or form.specimen and changed:  # (another specimen: Study.build says)
             continue
         ref = form.reference(study, p, f, qoi) if form.with_qoi else form.reference(study, p, f)
         if ref is None:  # the form does not apply to this run (e.g. growth that did not happen)

@@ -48,7 +48,11 @@ Sections (one concept, one key):
 - checks.*:     a qoi against a closed form registered in code (study/closed_forms.py) or against
                 a test's value or range given with its source
 - coupling:     the FEM-DEM tie
-- ranges:       "key" = [low, high], the verified range of a numeric key (outside: refused)
+- ranges:       "key" = [low, high], the verified range of a numeric key (outside: refused); a
+                run that changes a key of the specimen (materials, interfaces, laminates,
+                geometry, impactors, loads, delaminations, sheets, supports) with no range
+                is warned that its checks are not verified there, and test data (test_value,
+                test_between) are compared only on the case file's own specimen
 """
 from __future__ import annotations
 
