@@ -303,7 +303,8 @@ class Study:
                 if kind == "point_displacement" and name in ref:
                     history[f"no_fracture.{name}"] = ref[name]
                     qoi[f"peak_{name}_no_fracture"] = float(np.max(ref[name]))
-                    qoi[f"{name}_change_by_fracture"] = qoi[f"peak_{name}"] / qoi[f"peak_{name}_no_fracture"] - 1
+                    still = qoi[f"peak_{name}_no_fracture"]  # (0 in a run too short to move: no change to speak of)
+                    qoi[f"{name}_change_by_fracture"] = qoi[f"peak_{name}"] / still - 1 if still else float("nan")
         placed = self.placement(p, mode)
         if placed is not None:
             qoi.update(placed.qoi())

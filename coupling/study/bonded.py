@@ -246,7 +246,8 @@ def _fem_region(p: dict, bb: BondedBeam, x0: float, dim: int):
     n, d, ts = bb.rows, bb.d, bb.ts
     L, s = bb.length / 2, bb.span / 2
     xs = _lines(x0, s, d, p["mesh.growth"], p["mesh.max_size"])
-    xs += list(np.linspace(s, L, max(2, int(np.ceil((L - s) / p["mesh.max_size"]))) + 1)[1:])
+    if L - s > 1e-9 * L:  # the overhang beyond the support (none when the span is the length)
+        xs += list(np.linspace(s, L, max(2, int(np.ceil((L - s) / p["mesh.max_size"]))) + 1)[1:])
     depth = np.concatenate([[-ts], d * np.arange(1, n + 1)])
     if dim == 3:
         m = mesh.box(np.array(xs), np.linspace(0.0, 0.5 * p["geometry.width"], p["mesh.elements_width"] + 1), depth,

@@ -432,13 +432,17 @@ def parameters(data: dict, where: str, probe_kinds: dict, closed_forms: dict,
             schema.update(_fields(table, fields, {}, where))
     layout = Layout(names, meta)
     _references(schema, layout, where)
-    _ranges(schema, data.get("ranges", {}), where)
+    given = {f"{t}.{k}" for t, body in data.items() if isinstance(body, dict) for k in body}
+    given |= {f"{t}.{n}.{k}" for t, body in data.items() if t in COLLECTIONS and isinstance(body, dict)
+              for n, entry in body.items() if isinstance(entry, dict) for k in entry}
+    _ranges(schema, data.get("ranges", {}), where, given)
     return schema, layout
 
 
-def _ranges(schema: dict[str, Param], ranges: dict, where: str) -> None:
+def _ranges(schema: dict[str, Param], ranges: dict, where: str, given: set = frozenset()) -> None:
     """[ranges] "key" = [low, high]: the range over which the study's checks are verified;
-    values outside it are refused like any out-of-range value."""
+    values outside it are refused like any out-of-range value, the file's own among them (a key
+    the file leaves out keeps its default: the shape's checks say when it is required)."""
     if not isinstance(ranges, dict):
         raise CaseError(f"ranges = {ranges!r}: expected a table of \"key\" = [low, high] in {where}")
     for key, pair in ranges.items():
@@ -453,7 +457,8 @@ def _ranges(schema: dict[str, Param], ranges: dict, where: str) -> None:
         ranged = Param(param.default, param.doc + " (verified range)", param.kind, param.unit, low, high,
                        param.open_low and low == param.low, param.open_high and high == param.high,
                        param.choices, param.plausible, param.check)
-        ranged.coerce(key, param.default)  # the file's own value inside its range
+        if key in given:
+            ranged.coerce(key, param.default)  # the file's own value inside its range
         schema[key] = ranged
 
 
