@@ -9,10 +9,24 @@ A nan that reaches the state is what the energy guard and the instability checks
 """
 from __future__ import annotations
 
+import types
+
 from numba import njit
 
 
 def kernel(fn=None, **options):
     """``@kernel`` or ``kernel(parallel=True)(fn)``: njit with the project's options."""
     options = {"cache": True, "error_model": "numpy", **options}
-    return njit(**options)(fn) if fn is not None else njit(**options)
+    build = lambda f: njit(**options)(_cached_as(f, "parallel" if options.get("parallel") else "serial"))
+    return build(fn) if fn is not None else build
+
+
+def _cached_as(fn, build: str):
+    """``fn`` under a name of its own in numba's disk cache. The cache's key is the function's
+    name, bytecode and signature, not its compile options: a serial and a parallel build of
+    one function loaded each other's machine code, and a YADE process (whose OpenMP runtime
+    numba's must not share) that called the serial build ran the parallel one and crashed."""
+    twin = types.FunctionType(fn.__code__, fn.__globals__, fn.__name__, fn.__defaults__, fn.__closure__)
+    twin.__kwdefaults__, twin.__doc__, twin.__module__ = fn.__kwdefaults__, fn.__doc__, fn.__module__
+    twin.__qualname__ = f"{fn.__qualname__}.{build}"
+    return twin

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import copy
 from functools import lru_cache
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -17,6 +18,7 @@ from hypothesis import example, given, settings, strategies as st
 from physics.law_bonds import LawBonds
 from physics.laws import HashinCohesiveLaw
 
+ROOT = Path(__file__).resolve().parents[1]
 AS4 = HashinCohesiveLaw(K=1e14, Z0=80e6, R0=100e6, GIc=969.0, GIIc=1719.0, eta=2.284)
 
 
@@ -171,3 +173,28 @@ def test_compiled_ball_contact_is_the_gap_form(seed, dim, friction):
     assert (pen > 0).any() and (pen == 0).any()
     np.testing.assert_array_equal(f, ref)
     assert stored == pytest.approx(0.5 * imp.penalty * float(pen @ pen), rel=1e-14)
+
+
+def test_a_serial_and_a_parallel_build_never_load_each_others_cached_code(tmp_path):
+    """numba's disk cache keys a function by its name, bytecode and signature, not by its
+    compile options: a parallel build cached first was loaded by the serial build of the same
+    function (and a YADE process, whose OpenMP runtime numba must not share, crashed in it).
+    Each build has its own cache entry: a process that compiled the parallel build leaves
+    nothing the serial build of a later process loads, and the serial build then caches and
+    reloads its own."""
+    import os
+    import subprocess
+    import sys
+    (tmp_path / "twin.py").write_text(
+        "from numba import prange\nfrom physics.compiled import kernel\n\n"
+        "def total(x):\n    s = 0.0\n    for i in prange(x.size):\n        s += x[i]\n    return s\n\n"
+        "parallel, serial = kernel(parallel=True)(total), kernel(total)\n")
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache"),
+           "PYTHONPATH": os.pathsep.join([str(tmp_path), str(ROOT)])}
+    run = lambda build: subprocess.run(
+        [sys.executable, "-c", f"import numpy as np, twin; twin.{build}(np.ones(8)); "
+                               f"print(sum(twin.{build}.stats.cache_hits.values()))"],
+        env=env, capture_output=True, text=True, check=True).stdout.split()[-1]
+    assert run("parallel") == "0"  # compiled and cached
+    assert run("serial") == "0"  # not the parallel build's entry: compiled and cached on its own
+    assert run("serial") == "1" and run("parallel") == "1"  # each reloads its own
