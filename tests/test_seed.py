@@ -23,9 +23,9 @@ _UNRANGED = Path(tempfile.mkdtemp(prefix="femdem-unranged-"))
 
 
 def unranged(case: str) -> str:
-    """The seed case's file without its [ranges], for ELASTIC and CFRP_ELASTIC: strengths out of
-    reach are a test's device to keep the beam elastic (coupled = all-FEM when nothing breaks),
-    outside the ranges over which the damage is verified, which refuse them."""
+    """The seed case's file without its [ranges], for a test's device outside them: strengths out
+    of reach that keep a beam elastic (ELASTIC, CFRP_ELASTIC: coupled = all-FEM when nothing
+    breaks), a fast ramp cut short (the panel before buckling)."""
     text = (ROOT / "cases" / "seed" / f"{case}.toml").read_text()
     path = _UNRANGED / f"{case}.toml"
     path.write_text(text[: text.index("[ranges]")])
@@ -388,45 +388,58 @@ def test_rod_impact_bad_settings_are_caught(femdem):
 
 
 PANEL_RANGES = tomllib.loads((ROOT / "cases" / "seed" / "panel_buckling_coarse.toml").read_text())["ranges"]
-_panel_draw = dict(E11=st.floats(*PANEL_RANGES["materials.table2.E11"]),
-                   length=st.floats(*PANEL_RANGES["delaminations.film.length"]),
-                   plies=st.integers(*PANEL_RANGES["delaminations.film.sublaminate_plies"]))
+# every key of the panel's [ranges] at once (the sublaminate's plies an integer)
+PANEL = st.fixed_dictionaries({k: (st.integers if k.endswith("_plies") else st.floats)(*v) for k, v in PANEL_RANGES.items()})
 
 
-def _panel_run(femdem, mode, E11, length, plies, *extra):
-    return femdem("run", "panel_buckling_coarse", "--mode", mode, f"--set=materials.table2.E11={E11}",
-                  f"--set=delaminations.film.length={length}", f"--set=delaminations.film.sublaminate_plies={plies}",
-                  *extra)
+def _panel_run(femdem, mode, panel: dict, *extra):
+    return femdem("run", "panel_buckling_coarse", "--mode", mode, *[f"--set={k}={v!r}" for k, v in panel.items()], *extra)
+
+
+@settings(max_examples=1, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.generate],
+          suppress_health_check=[HealthCheck.function_scoped_fixture])  # (one draw: the suite's budget)
+@given(panel=PANEL)
+def test_panel_buckling_fem_anywhere_in_its_ranges(femdem, panel):
+    """Seed 5.2 all-FEM anywhere in its verified ranges (the ply, the interface, the plies'
+    thickness, the span, width and imperfections, the delamination's length and plies, the
+    shortening and its pace, every key drawn at once): axial stiffness, local and global
+    buckling loads against their closed forms at the case's tolerances (issue #22)."""
+    code, s, err = _panel_run(femdem, "fem", panel)
+    assert code == 0, err
+    assert_checks(s)
+    assert not [w for w in s["warnings"] if "not verified" in w], s["warnings"]
 
 
 @pytest.mark.slow
-@settings(max_examples=4, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
-@given(**_panel_draw)
-def test_panel_buckling_fem_over_its_geometry(femdem, E11, length, plies):
-    """Seed 5.2 all-FEM over its verified ranges (the ply modulus, the delamination length, 0.4
-    to 0.55 of the span, and the sublaminate's plies): axial stiffness, local and global
-    buckling loads against their closed forms at the case's tolerances (issue #22)."""
-    code, s, err = _panel_run(femdem, "fem", E11, length, plies)
+@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(panel=PANEL)
+def test_panel_buckling_fem_over_wider_draws(femdem, panel):
+    """The same, random draws (-m slow)."""
+    code, s, err = _panel_run(femdem, "fem", panel)
     assert code == 0, err
     assert_checks(s)
 
 
 @pytest.mark.slow
 @settings(max_examples=3, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
-@example(dem="lammps", E11=180e9, length=29.6e-3, plies=5)  # the film grows as it buckles
-@example(dem="yade", E11=100e9, length=40.7e-3, plies=3)  # growth only at the limit load
-@example(dem="liggghts", E11=100e9, length=29.6e-3, plies=3)  # a window edge's particle on a hole's edge
-@given(dem=st.sampled_from(["liggghts", "lammps", "yade"]), **_panel_draw)
-def test_panel_buckling_coupled_holds_its_checks_over_its_ranges(femdem, dem, E11, length, plies):
+@example(dem="lammps", panel={"materials.table2.E11": 180e9, "delaminations.film.length": 29.6e-3,
+                              "delaminations.film.sublaminate_plies": 5})  # the film grows as it buckles
+@example(dem="yade", panel={"materials.table2.E11": 100e9, "delaminations.film.length": 40.7e-3,
+                            "delaminations.film.sublaminate_plies": 3})  # growth only at the limit load
+@example(dem="liggghts", panel={"materials.table2.E11": 100e9, "delaminations.film.length": 29.6e-3,
+                                "delaminations.film.sublaminate_plies": 3})  # a window edge's particle on a hole's edge
+@given(dem=st.sampled_from(["liggghts", "lammps", "yade"]), panel=PANEL)
+def test_panel_buckling_coupled_holds_its_checks_over_its_ranges(femdem, dem, panel):
     """Seed 5.2 coupled, with growth, over the same ranges and on the three engines (3-8
     minutes a draw on LIGGGHTS and LAMMPS, 50 on YADE): every check of the case holds at its tolerance (axial stiffness, the
     film's and the panel's buckling loads, Hutchinson & Suo's onset on the measured mode mix,
-    dissipation between GIc and GIIc per new area), and both tips grow alike (symmetry)."""
-    code, s, err = _panel_run(femdem, "coupled", E11, length, plies, "--dem", dem)
+    dissipation between GIc and GIIc per new area), and both tips grow alike (symmetry, to two
+    particles of two plies each)."""
+    code, s, err = _panel_run(femdem, "coupled", panel, "--dem", dem)
     assert code == 0, err
     assert_checks(s)
-    q = s["qoi"]
-    assert q["delamination_growth_left"] == pytest.approx(q["delamination_growth_right"], abs=2 * 0.254e-3)
+    q, tp = s["qoi"], s["parameters"]["laminates.panel.ply_thickness"]
+    assert q["delamination_growth_left"] == pytest.approx(q["delamination_growth_right"], abs=2 * 2 * tp)
 
 
 def test_panel_buckling_coarse(femdem):
@@ -449,8 +462,8 @@ def test_panel_buckling_coupled_equals_fem_before_buckling(femdem, tmp_path):
     debonded bonds inside the delamination carry nothing in tension)."""
     runs = {}
     for mode in ("fem", "coupled"):
-        code, s, err = femdem("run", "panel_buckling_coarse", "--mode", mode, *DEM[mode],
-                              "--set=clock.t_end=0.5e-3", "--set=loads.compression.duration_periods=16")
+        code, s, err = femdem("run", unranged("panel_buckling_coarse"), "--mode", mode, *DEM[mode],  # (a fast
+                              "--set=clock.t_end=0.5e-3", "--set=loads.compression.duration_periods=16")  # ramp, cut)
         assert code == 0, err
         runs[mode] = s
     import h5py

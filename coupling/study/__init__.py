@@ -7,6 +7,7 @@ treats both alike.
 """
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -32,6 +33,11 @@ class Study:
         self.NAME = name
         self.PARAMETERS, self.layout = parameters(data, where, probes.PROBES, closed_forms.CLOSED_FORMS)
         self.ranged = frozenset(data.get("ranges", {}))  # keys whose [ranges] the tests verify
+        if self.ranged:  # the help says which of the specimen's keys are verified only at the file's value
+            self.PARAMETERS.update({k: replace(v, doc=v.doc + " (verified at this value; another runs, warned)")
+                                    for k, v in self.PARAMETERS.items()
+                                    if k.startswith(SPECIMEN) and k not in self.ranged and not self.structural(k)
+                                    and (v.choices is None or len(v.choices) > 1)})
         meta = self.layout.meta
         self.DESCRIPTION = str(meta.get("description", ""))
         shape = self.PARAMETERS["geometry.shape"].default

@@ -221,7 +221,10 @@ def panel_region(p: dict, g: Panel, win: list):
     for xa, xb in win:  # the windows' own lines; none closer than half an element to their edges
         xs = xs[(xs < xa - 0.5 * dx) | (xs > xb + 0.5 * dx)]
         xs = np.concatenate([xs, np.linspace(xa, xb, int(np.ceil((xb - xa) / dx - 1e-9)) + 1)])
-    xs = np.unique(np.round(np.concatenate([xs, [] if win else [x1, x2]]), 12))  # the tips on lines
+    if not win:  # the tips on lines: each takes its nearest line's place (no sliver beside a tip)
+        for x in (x1, x2):
+            xs[1 + np.argmin(np.abs(xs[1:-1] - x))] = x
+    xs = np.unique(np.round(xs, 12))
     # through the thickness: the band's rows are FEM outside the windows; the sublaminate
     # keeps its element height above it (a thinner element would lower the FEM's stable step)
     n_film = max(1, int(round(p["mesh.elements_sublaminate"] * (h - band) / h)))
