@@ -442,7 +442,7 @@ def parameters(data: dict, where: str, probe_kinds: dict, closed_forms: dict,
 def _ranges(schema: dict[str, Param], ranges: dict, where: str, given: set = frozenset()) -> None:
     """[ranges] "key" = [low, high]: the range over which the study's checks are verified;
     values outside it are refused like any out-of-range value, the file's own among them (a key
-    the file leaves out keeps its default: the shape's checks say when it is required)."""
+    the file leaves out is required when its default lies outside the range)."""
     if not isinstance(ranges, dict):
         raise CaseError(f"ranges = {ranges!r}: expected a table of \"key\" = [low, high] in {where}")
     for key, pair in ranges.items():
@@ -457,8 +457,13 @@ def _ranges(schema: dict[str, Param], ranges: dict, where: str, given: set = fro
         ranged = Param(param.default, param.doc + " (verified range)", param.kind, param.unit, low, high,
                        param.open_low and low == param.low, param.open_high and high == param.high,
                        param.choices, param.plausible, param.check)
-        if key in given:
-            ranged.coerce(key, param.default)  # the file's own value inside its range
+        if key not in given:  # a default outside the range would run unverified
+            try:
+                ranged.coerce(key, param.default)
+            except CaseError:
+                raise CaseError(f"{key}: required in {where} by its [ranges] entry; allowed: {ranged.allowed()} "
+                                f"({param.doc})") from None
+        ranged.coerce(key, param.default)  # the file's own value inside its range
         schema[key] = ranged
 
 
