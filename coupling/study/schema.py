@@ -457,13 +457,13 @@ def _ranges(schema: dict[str, Param], ranges: dict, where: str, given: set = fro
         ranged = Param(param.default, param.doc + " (verified range)", param.kind, param.unit, low, high,
                        param.open_low and low == param.low, param.open_high and high == param.high,
                        param.choices, param.plausible, param.check)
-        if key not in given:  # a default outside the range would run unverified
-            try:
-                ranged.coerce(key, param.default)
-            except CaseError:
-                raise CaseError(f"{key}: required in {where} by its [ranges] entry; allowed: {ranged.allowed()} "
-                                f"({param.doc})") from None
-        ranged.coerce(key, param.default)  # the file's own value inside its range
+        try:
+            ranged.coerce(key, param.default)  # the file's own value inside its range
+        except CaseError:
+            if key in given:
+                raise
+            raise CaseError(f"{key}: required in {where} by its [ranges] entry (its default would run unverified); "
+                            f"allowed: {ranged.allowed()} ({param.doc})") from None
         schema[key] = ranged
 
 
