@@ -317,8 +317,9 @@ def _rod_run(femdem, values: dict, mode: str, dem: str = "", extra=()):
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(**_rod_draw)
 def test_rod_impact_holds_its_closed_form_over_its_ranges(femdem, **draw):
-    """Seed 5.3 all-FEM over the ply moduli and thickness, the plate's diameter and the rod's
-    radius, length and speed (the case's [ranges]): the peak deflection in the bracket of the
+    """Seed 5.3 all-FEM anywhere in the case's [ranges] (the ply's constants, strengths and
+    fracture energies and thickness, the interface, the plate's diameter and the rod's radius,
+    length, density and speed, every key drawn at once): the peak deflection in the bracket of the
     intact and delaminated plates' bending + shear spring-mass estimates (35 %; the upper alone
     for a small-mass impact, which the run says), the ledger closed (issue #22)."""
     values = {k: draw[k.replace(".", "_")] for k in ROD_RANGES}
