@@ -42,11 +42,12 @@ class Param:
             return "one of " + ", ".join(repr(c) for c in self.choices)
         if self.kind == "bool":
             return "true or false"
+        num = (lambda v: str(int(v))) if self.kind == "int" else (lambda v: f"{v:g}")  # a seed's 2147483647 in full
         parts = []
         if self.low is not None:
-            parts.append(f"{'>' if self.open_low else '>='} {self.low:g}")
+            parts.append(f"{'>' if self.open_low else '>='} {num(self.low)}")
         if self.high is not None:
-            parts.append(f"{'<' if self.open_high else '<='} {self.high:g}")
+            parts.append(f"{'<' if self.open_high else '<='} {num(self.high)}")
         if self.kind == "table":
             return "a list of at least two [time, value] rows, times increasing"
         what = {"float": "a number", "int": "an integer", "str": "a string"}[self.kind]

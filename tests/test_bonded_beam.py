@@ -92,15 +92,22 @@ def test_test_data_checks_compare_with_the_values_in_the_file():
 
 
 def ranged_draw(case: str):
-    """A strategy of --set lists over every key of the case file's [ranges] at once, the depth
-    drawn as whole rows of the case's particle size (any other depth is refused)."""
+    """A strategy of --set lists over every key of the case file's [ranges] at once: the depth
+    drawn as whole rows of the case's particle size, a 3D beam's width as whole spacings on each
+    side of its plane of symmetry (any other is refused), integer keys as integers; and the run's
+    end, 0.45 ms of the test's load, stretched with its time scale."""
     data = tomllib.loads((ROOT / "cases" / "seed" / f"{case}.toml").read_text())
     ranges, d = data["ranges"], data["zone"]["particle_size"]
-    floats = {k: st.floats(*v) for k, v in ranges.items() if k != "geometry.depth"}
-    low, high = ranges["geometry.depth"]
-    rows = st.integers(math.ceil(low / d - 1e-9), math.floor(high / d + 1e-9))
-    return st.builds(lambda v, n: [f"--set={k}={x!r}" for k, x in {**v, "geometry.depth": n * d}.items()],
-                     st.fixed_dictionaries(floats), rows)
+    whole = {"geometry.depth": d, **({"geometry.width": 2 * d} if data["geometry"]["shape"].endswith("_3d") else {})}
+    draws = {k: st.integers(*v) if all(isinstance(x, int) for x in v) else st.floats(*v)
+             for k, v in ranges.items() if k not in whole}
+    draws.update({k: st.integers(math.ceil(ranges[k][0] / step - 1e-9), math.floor(ranges[k][1] / step + 1e-9)).map(
+        lambda n, step=step: n * step) for k, step in whole.items()})
+
+    def sets(values):
+        t_end = 0.45e-3 * values["loads.drop.time_scale"] / data["loads"]["drop"]["time_scale"]
+        return [f"--set={k}={x!r}" for k, x in values.items()] + [f"--set=clock.t_end={t_end!r}"]
+    return st.fixed_dictionaries(draws).map(sets)
 
 
 @settings(max_examples=1, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.generate],
@@ -111,7 +118,7 @@ def test_cracking_starts_when_the_elastic_beam_reaches_ft_over_its_ranges(femdem
     load and the beam's dimensions, every key drawn at once): the first bond softens within 20 %
     of the time the no-fracture all-FEM beam's bottom fibre reaches (1 - scatter) ft (the case's
     own check), the ledger closes, and nothing is warned as not verified."""
-    code, s, err = femdem("run", "cfrp_beam_impact_coarse", "--set=clock.t_end=0.45e-3", *sets)
+    code, s, err = femdem("run", "cfrp_beam_impact_coarse", *sets)
     assert code == 0, err
     c, q = s["checks"], s["qoi"]
     assert c["energy_balance"]["passed"], c
@@ -126,7 +133,7 @@ def test_cracking_starts_when_the_elastic_beam_reaches_ft_over_its_ranges(femdem
 @given(dem=st.sampled_from(["liggghts", "lammps", "yade"]), sets=ranged_draw("cfrp_beam_impact_coarse"))
 def test_cracking_onset_over_its_ranges_on_every_engine(femdem, dem, sets):
     """The same check, random draws, on the three engines (-m slow)."""
-    code, s, err = femdem("run", "cfrp_beam_impact_coarse", "--dem", dem, "--set=clock.t_end=0.45e-3", *sets)
+    code, s, err = femdem("run", "cfrp_beam_impact_coarse", "--dem", dem, *sets)
     assert code == 0, err
     assert s["checks"]["energy_balance"]["passed"] and s["checks"]["crack_onset_time"]["passed"], (sets, s["checks"])
 
@@ -135,8 +142,8 @@ def test_cracking_onset_over_its_ranges_on_every_engine(femdem, dem, sets):
 @settings(max_examples=3, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(dem=st.sampled_from(["liggghts", "lammps", "yade"]), sets=ranged_draw("cfrp_beam_impact_3d_coarse"))
 def test_the_3d_beam_cracks_on_time_over_its_ranges(femdem, dem, sets):
-    """The 3D quarter beam (cfrp_beam_impact_3d_coarse, the 2D case's [ranges] but the width)
+    """The 3D quarter beam (cfrp_beam_impact_3d_coarse, the 2D case's [ranges])
     over its ranges: the crack-onset check and the ledger hold on the three engines (-m slow)."""
-    code, s, err = femdem("run", "cfrp_beam_impact_3d_coarse", "--dem", dem, "--set=clock.t_end=0.45e-3", *sets)
+    code, s, err = femdem("run", "cfrp_beam_impact_3d_coarse", "--dem", dem, *sets)
     assert code == 0, err
     assert s["checks"]["energy_balance"]["passed"] and s["checks"]["crack_onset_time"]["passed"], (sets, s["checks"])
