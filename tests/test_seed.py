@@ -147,13 +147,19 @@ def test_beam_impact_3d_coarse(femdem):
 
 
 @pytest.mark.slow  # the 3D plate's equivalence runs in the default suite (tests/test_study.py)
-def test_beam_impact_3d_coupled_equals_fem_when_elastic(femdem):
-    """3D, damage out of reach, to past the peak: the coupled strip (lattice + Hex8, tied on
-    a face) and the all-Hex8 strip give the same peak centre deflection within 3 %."""
+@settings(max_examples=3, deadline=None, phases=[Phase.explicit, Phase.generate],
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@example(span=50e-3, spacings=5)  # the case file's strip
+@given(span=st.floats(40e-3, 80e-3), spacings=st.integers(5, 40))
+def test_beam_impact_3d_coupled_equals_fem_when_elastic(femdem, span, spacings):
+    """3D, damage out of reach, to past the peak, over the case's span and width (half the
+    width whole particle spacings of 0.3 mm, 3-24 mm): the coupled strip (lattice + Hex8, tied
+    on a face) and the all-Hex8 strip give the same peak centre deflection within 3 %."""
     peaks = {}
     for mode in ("fem", "coupled"):
         code, s, err = femdem("run", unranged("beam_impact_3d_coarse"), "--mode", mode, *DEM[mode], *ELASTIC,
-                              "--set=clock.t_end=0.15e-3")
+                              f"--set=geometry.span={span!r}", f"--set=geometry.width={2 * spacings * 0.3e-3!r}",
+                              f"--set=clock.t_end={0.15e-3 * (span / 50e-3) ** 1.5!r}")
         assert code == 0, err
         peaks[mode] = s["qoi"]["peak_centre_displacement"]
     assert abs(peaks["coupled"] / peaks["fem"] - 1) < 0.03, peaks

@@ -43,7 +43,12 @@ def study_text(**replace) -> str:
     ({}, "[springs]\nforce = 1.0\n", ["[springs]", "unknown table"]),
     ({}, "[loads.drop]\nwidth = 0.01\n", ["[loads.drop]", "takes none"]),
     ({}, '[ranges]\n"geometry.span" = [50e-3, 80e-3]\n', ["geometry.span", "0.04", ">= 0.05"]),
-    ({}, '[ranges]\n"geometry.spam" = [50e-3, 80e-3]\n', ["ranges.geometry.spam", "not a numeric key"]),
+    ({}, '[ranges]\n"geometry.spam" = [50e-3, 80e-3]\n', ["ranges.geometry.spam", "not a numeric or text key"]),
+    # a text key's verified values: the file's own among them, each one valid, a list
+    ({}, '[ranges]\n"laminates.crossply.layup" = ["[0_4/90_4]"]\n', ["laminates.crossply.layup", "'[0_4/90_4]'"]),
+    ({}, '[ranges]\n"supports.rollers.condition" = ["simply_supported", "pinned"]\n',
+     ["ranges.supports.rollers.condition", "pinned", "'clamped'"]),
+    ({}, '[ranges]\n"laminates.crossply.layup" = "[0_2/90_2]s"\n', ["ranges.laminates.crossply.layup", "a list"]),
 ])
 def test_a_bad_study_is_refused_in_one_line(tmp_path, replace, extra, words):
     from coupling.case import load_case
@@ -54,6 +59,20 @@ def test_a_bad_study_is_refused_in_one_line(tmp_path, replace, extra, words):
         load_case(str(path))
     line = str(err.value)
     assert "\n" not in line and all(w in line for w in words), line
+
+
+def test_a_text_key_runs_only_at_its_verified_values(tmp_path):
+    """[ranges] with a list for a text key: its values load, any other is refused naming them."""
+    from coupling.case import load_case
+    from coupling.params import CaseError
+    path = tmp_path / "study.toml"
+    path.write_text(study_text() + '[ranges]\n"supports.rollers.condition" = ["simply_supported", "clamped"]\n'
+                    '"laminates.crossply.layup" = ["[0_2/90_2]s", "[0_4/90_4]"]\n')
+    case = load_case(str(path), {"supports.rollers.condition": "clamped", "laminates.crossply.layup": "[0_4/90_4]"})
+    assert (case.parameters["supports.rollers.condition"], case.parameters["laminates.crossply.layup"]) == \
+        ("clamped", "[0_4/90_4]")
+    with pytest.raises(CaseError, match=r"laminates.crossply.layup = '\[90_8\]': expected one of '\[0_2/90_2\]s'"):
+        load_case(str(path), {"laminates.crossply.layup": "[90_8]"})
 
 
 @pytest.mark.parametrize("key, value, words", [
@@ -447,19 +466,23 @@ BEAM_3D_RANGES = tomllib.loads((ROOT / "cases" / "seed" / "beam_impact_3d_coarse
 @given(dem=st.sampled_from(["liggghts", "lammps"]),
        **{k.replace(".", "_"): st.floats(*v) for k, v in BEAM_3D_RANGES.items() if not k.endswith(".G23")})
 def test_the_3d_beam_holds_its_bracket_anywhere_in_its_ranges(femdem, dem, **draw):
-    """The 3D seed strip, coupled, every verified key drawn at once (the impact, the ply's
-    moduli, strengths and fracture energies, the interface, the ply thickness, the impactor's
-    friction; G23 = E22 / (2 (1 + nu23))): the peak deflection lies in its bracket and the ledger
-    closes, to past the peak (issue #22)."""
+    """The 3D seed strip, coupled, every verified key drawn at once (the span and width, the
+    impact, the ply's moduli, strengths and fracture energies, the interface, the ply thickness,
+    the impactor's friction; G23 = E22 / (2 (1 + nu23))): the peak deflection lies in its
+    bracket and the ledger closes, to past the peak (issue #22)."""
     values = {k: draw[k.replace(".", "_")] for k in BEAM_3D_RANGES if not k.endswith(".G23")}
     m = "materials.graphite_epoxy."
     values[m + "G23"] = float(np.clip(values[m + "E22"] / (2 * (1 + values[m + "nu23"])), *BEAM_3D_RANGES[m + "G23"]))
-    t_end = 0.2e-3 * np.sqrt(values["impactors.cylinder.mass_per_width"] / 0.617 * 156e9 / values[m + "E11"])
-    # the strip's half width, 1.5 mm, in whole particle spacings (two plies each), as the case asks
+    # past the peak: sqrt(M / k), k ~ E11 / span^3
+    t_end = 0.2e-3 * np.sqrt(values["impactors.cylinder.mass_per_width"] / 0.617 * 156e9 / values[m + "E11"]
+                             * (values["geometry.span"] / 50e-3) ** 3)
+    # half the width in whole particle spacings (two plies each), as the case asks
     d = 2 * values["laminates.beam.ply_thickness"]
-    width = 2 * d * max(1, round(1.5e-3 / d))
+    low, high = BEAM_3D_RANGES["geometry.width"]
+    values["geometry.width"] = 2 * d * int(np.clip(round(values["geometry.width"] / (2 * d)),
+                                                   np.ceil(low / (2 * d)), np.floor(high / (2 * d))))
     code, s, err = femdem("run", "beam_impact_3d_coarse", "--dem", dem, *[f"--set={k}={v!r}" for k, v in values.items()],
-                          f"--set=clock.t_end={t_end}", f"--set=geometry.width={width!r}")
+                          f"--set=clock.t_end={t_end}")
     assert code == 0, err
     assert_checks(s)
 

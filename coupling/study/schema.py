@@ -48,7 +48,8 @@ Sections (one concept, one key):
 - checks.*:     a qoi against a closed form registered in code (study/closed_forms.py) or against
                 a test's value or range given with its source
 - coupling:     the FEM-DEM tie
-- ranges:       "key" = [low, high], the verified range of a numeric key (outside: refused); a
+- ranges:       "key" = [low, high], the verified range of a numeric key, or a list of a text
+                key's verified values (a layup, a support condition; outside: refused); a
                 run that changes a key of the specimen (materials, interfaces, laminates,
                 geometry, impactors, loads, delaminations, sheets, supports) with no range
                 is warned that its checks are not verified there, and test data (test_value,
@@ -440,23 +441,32 @@ def parameters(data: dict, where: str, probe_kinds: dict, closed_forms: dict,
 
 
 def _ranges(schema: dict[str, Param], ranges: dict, where: str, given: set = frozenset()) -> None:
-    """[ranges] "key" = [low, high]: the range over which the study's checks are verified;
-    values outside it are refused like any out-of-range value, the file's own among them (a key
-    the file leaves out is required when its default lies outside the range)."""
+    """[ranges] "key" = [low, high], or a text key's list of verified values: the range over which
+    the study's checks are verified; values outside it are refused like any out-of-range value,
+    the file's own among them (a key the file leaves out is required when its default lies
+    outside the range)."""
     if not isinstance(ranges, dict):
         raise CaseError(f"ranges = {ranges!r}: expected a table of \"key\" = [low, high] in {where}")
     for key, pair in ranges.items():
         param = schema.get(key)
-        if param is None or param.kind not in ("float", "int"):
-            raise CaseError(f"ranges.{key}: not a numeric key of this study in {where}")
-        if (not isinstance(pair, list) or len(pair) != 2 or any(isinstance(v, bool) or not isinstance(v, (int, float))
-                                                               for v in pair) or not pair[0] <= pair[1]):
-            raise CaseError(f"ranges.{key} = {pair!r}: expected [low, high] with low <= high in {where}")
-        low = max(pair[0], param.low) if param.low is not None else pair[0]
-        high = min(pair[1], param.high) if param.high is not None else pair[1]
-        ranged = Param(param.default, param.doc + " (verified range)", param.kind, param.unit, low, high,
-                       param.open_low and low == param.low, param.open_high and high == param.high,
-                       param.choices, param.plausible, param.check)
+        if param is None or param.kind not in ("float", "int", "str"):
+            raise CaseError(f"ranges.{key}: not a numeric or text key of this study in {where}")
+        if param.kind == "str":
+            if not isinstance(pair, list) or not pair or not all(isinstance(v, str) for v in pair):
+                raise CaseError(f"ranges.{key} = {pair!r}: expected a list of the verified values in {where}")
+            for value in pair:
+                param.coerce(f"ranges.{key}", value)
+            ranged = Param(param.default, param.doc + " (verified values)", "str", param.unit,
+                           choices=tuple(pair), check=param.check)
+        else:
+            if (not isinstance(pair, list) or len(pair) != 2 or any(isinstance(v, bool) or not isinstance(v, (int, float))
+                                                                   for v in pair) or not pair[0] <= pair[1]):
+                raise CaseError(f"ranges.{key} = {pair!r}: expected [low, high] with low <= high in {where}")
+            low = max(pair[0], param.low) if param.low is not None else pair[0]
+            high = min(pair[1], param.high) if param.high is not None else pair[1]
+            ranged = Param(param.default, param.doc + " (verified range)", param.kind, param.unit, low, high,
+                           param.open_low and low == param.low, param.open_high and high == param.high,
+                           param.choices, param.plausible, param.check)
         try:
             ranged.coerce(key, param.default)  # the file's own value inside its range
         except CaseError:
