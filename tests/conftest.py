@@ -8,12 +8,16 @@ if int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1")) > 1:
 
 import coupling  # noqa: E402, F401  (first: it sets the BLAS threads before numpy loads)
 import json
+import tempfile
 from pathlib import Path
 
 import pytest
 from hypothesis import HealthCheck, Phase, settings
+from hypothesis import strategies as st
 
 from coupling.cli import main
+
+SEED_CASES = Path(__file__).resolve().parents[1] / "cases" / "seed"
 
 # The default suite draws the same examples on every machine (a CI run that fails can be run
 # again and fails the same way; a random draw once failed CI on a health check of the
@@ -49,3 +53,31 @@ def assert_checks(summary):
     assert summary["checks"], "a verification case must record checks"
     for name, c in summary["checks"].items():
         assert c["passed"], f"{name}: {c}"
+
+
+def verified(entry: list):
+    """A strategy over one [ranges] entry of a case file: a text key's verified values, an
+    integer key's integers, else the floats between its bounds."""
+    if all(isinstance(v, str) for v in entry):
+        return st.sampled_from(entry)
+    return st.integers(*entry) if all(isinstance(v, int) for v in entry) else st.floats(*entry)
+
+
+def later_peak(layup: str, support: str) -> float:
+    """A bound on how much later a seed beam's peak deflection comes at another verified layup
+    and support than at its own: sqrt(M / k), k 4 x lower simply supported, at most 2 x lower
+    at another layup of cases/seed/beam_impact*.toml [ranges]."""
+    return (2.0 if support == "simply_supported" else 1.0) * (1.0 if layup == "[0_6/90_4/0_6]" else 1.5)
+
+
+_UNRANGED = Path(tempfile.mkdtemp(prefix="femdem-unranged-"))
+
+
+def unranged(case: str) -> str:
+    """The seed case's file without its [ranges], for a test's device outside them: strengths out
+    of reach that keep a beam elastic (ELASTIC, CFRP_ELASTIC: coupled = all-FEM when nothing
+    breaks), a fast ramp cut short (the panel before buckling), a closed form at another layup."""
+    text = (SEED_CASES / f"{case}.toml").read_text()
+    path = _UNRANGED / f"{case}.toml"
+    path.write_text(text[: text.index("[ranges]")])
+    return str(path)

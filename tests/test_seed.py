@@ -1,6 +1,5 @@
 """The seed paper's examples (issue 9): coarse variants with their checks, and the coupled
 model against its standalone references when nothing breaks."""
-import tempfile
 import tomllib
 from pathlib import Path
 
@@ -12,26 +11,13 @@ from hypothesis import strategies as st
 # the engine for the modes that run one (--dem with --mode fem is refused: it changes nothing)
 DEM = {"fem": [], "coupled": ["--dem", "liggghts"], "dem": ["--dem", "liggghts"]}
 
-from conftest import assert_checks
+from conftest import assert_checks, later_peak, unranged, verified
 
 ROOT = Path(__file__).resolve().parents[1]
 
 # every strength and toughness out of reach: the same beam, elastic
 ELASTIC = [f"--set=materials.graphite_epoxy.{k}=1e11" for k in ("Xt", "Xc", "Yt", "Yc", "S12", "S23")] + \
           [f"--set=interfaces.table1.{k}" for k in ("Z0=1e10", "R0=1e10", "GIc=1e7", "GIIc=1e7")]
-_UNRANGED = Path(tempfile.mkdtemp(prefix="femdem-unranged-"))
-
-
-def unranged(case: str) -> str:
-    """The seed case's file without its [ranges], for a test's device outside them: strengths out
-    of reach that keep a beam elastic (ELASTIC, CFRP_ELASTIC: coupled = all-FEM when nothing
-    breaks), a fast ramp cut short (the panel before buckling)."""
-    text = (ROOT / "cases" / "seed" / f"{case}.toml").read_text()
-    path = _UNRANGED / f"{case}.toml"
-    path.write_text(text[: text.index("[ranges]")])
-    return str(path)
-
-
 def test_beam_impact_coarse(femdem, tmp_path):
     # on LIGGGHTS, the fastest engine here (the suite's budget); YADE runs it in the quick start
     code, s, err = femdem("run", "beam_impact_coarse", "--dem", "liggghts")
@@ -56,21 +42,25 @@ def test_beam_impact_coupled_equals_fem_when_elastic(femdem):
     assert abs(peaks["coupled"] / peaks["fem"] - 1) < 0.03
 
 
+BEAM_RANGES = tomllib.loads((ROOT / "cases" / "seed" / "beam_impact_coarse.toml").read_text())["ranges"]
 BEAM_GEOMETRY = dict(span=st.floats(20e-3, 40e-3), radius=st.floats(3e-3, 8e-3), velocity=st.floats(2.0, 12.0),
-                     mass=st.floats(0.3, 1.2), zone=st.floats(0.25, 0.5))
+                     mass=st.floats(0.3, 1.2), zone=st.floats(0.25, 0.5),
+                     layup=verified(BEAM_RANGES["laminates.beam.layup"]),
+                     support=verified(BEAM_RANGES["supports.clamps.condition"]))
 
 
 @settings(max_examples=1, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.generate],
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(**BEAM_GEOMETRY)
-def test_beam_impact_checks_hold_over_its_ranges(femdem, span, radius, velocity, mass, zone):
+def test_beam_impact_checks_hold_over_its_ranges(femdem, span, radius, velocity, mass, zone, layup, support):
     """Seed 5.1 with damage, coupled, anywhere in its documented geometric and impact ranges
-    (cases/seed/beam_impact.toml [ranges]) and with a hand-drawn zone of 0.25-0.5 of the half
-    span: its checks (the ledger closes; the peak deflection near the spring-mass estimate)
-    pass (issue #22)."""
+    and at any of its verified layups and supports (cases/seed/beam_impact.toml [ranges]), with
+    a hand-drawn zone of 0.25-0.5 of the half span: its checks (the ledger closes; the peak
+    deflection near the spring-mass estimate) pass (issue #22)."""
     code, s, err = femdem("run", "beam_impact_coarse", f"--set=geometry.span={2 * span}",
                           f"--set=impactors.cylinder.radius={radius}", f"--set=impactors.cylinder.velocity={velocity}",
-                          f"--set=impactors.cylinder.mass_per_width={mass}", f"--set=zone.half_width={zone * span}")
+                          f"--set=impactors.cylinder.mass_per_width={mass}", f"--set=zone.half_width={zone * span}",
+                          f"--set=laminates.beam.layup={layup}", f"--set=supports.clamps.condition={support}")
     assert code == 0, err
     assert_checks(s)
 
@@ -78,20 +68,23 @@ def test_beam_impact_checks_hold_over_its_ranges(femdem, span, radius, velocity,
 @pytest.mark.slow
 @settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(**BEAM_GEOMETRY, mode=st.sampled_from(["coupled", "fem", "dem"]))
-def test_beam_impact_checks_hold_over_wide_samples(femdem, span, radius, velocity, mass, zone, mode):
+def test_beam_impact_checks_hold_over_wide_samples(femdem, span, radius, velocity, mass, zone, layup, support, mode):
     zone_set = [f"--set=zone.half_width={zone * span}"] if mode == "coupled" else []
     code, s, err = femdem("run", "beam_impact_coarse", "--mode", mode, *DEM[mode], f"--set=geometry.span={2 * span}",
                           f"--set=impactors.cylinder.radius={radius}", f"--set=impactors.cylinder.velocity={velocity}",
-                          f"--set=impactors.cylinder.mass_per_width={mass}", *zone_set)
+                          f"--set=impactors.cylinder.mass_per_width={mass}", *zone_set,
+                          f"--set=laminates.beam.layup={layup}", f"--set=supports.clamps.condition={support}")
     assert code == 0, err
     assert_checks(s)
 
 
-def coupled_against_fem(femdem, span, radius, velocity, mass, zone):
+def coupled_against_fem(femdem, span, radius, velocity, mass, zone, layup, support):
     """Peak centre deflections of the elastic seed beam, coupled / all-FEM - 1."""
+    slower = later_peak(layup, support)  # past the peak
     sets = [*ELASTIC, f"--set=geometry.span={2 * span}", f"--set=impactors.cylinder.radius={radius}",
             f"--set=impactors.cylinder.velocity={velocity}", f"--set=impactors.cylinder.mass_per_width={mass}",
-            f"--set=clock.t_end={0.15e-3 * (span / 25e-3) ** 2}"]  # past the peak
+            f"--set=clock.t_end={0.15e-3 * (span / 25e-3) ** 2 * slower}", f"--set=laminates.beam.layup={layup}",
+            f"--set=supports.clamps.condition={support}"]
     peaks = {}
     for mode in ("fem", "coupled"):
         zone_set = [f"--set=zone.half_width={zone * span}"] if mode == "coupled" else []
@@ -104,18 +97,19 @@ def coupled_against_fem(femdem, span, radius, velocity, mass, zone):
 @settings(max_examples=1, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.generate],
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(**BEAM_GEOMETRY)
-def test_beam_impact_coupled_equals_fem_over_its_geometry(femdem, span, radius, velocity, mass, zone):
+def test_beam_impact_coupled_equals_fem_over_its_geometry(femdem, **draw):
     """The elastic equivalence over the seed beam's geometry and impact (issue #22): span 40 to
     80 mm, impactor radius 3 to 8 mm, 2 to 12 m/s, 0.3 to 1.2 kg/m, a DEM zone of a quarter to
-    half the half span: coupled and all-FEM peak centre deflections within 3 %."""
-    assert abs(coupled_against_fem(femdem, span, radius, velocity, mass, zone)) < 0.03
+    half the half span, the verified layups and supports: coupled and all-FEM peak centre
+    deflections within 3 %."""
+    assert abs(coupled_against_fem(femdem, **draw)) < 0.03
 
 
 @pytest.mark.slow
 @settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(**BEAM_GEOMETRY)
-def test_beam_impact_coupled_equals_fem_over_wide_samples(femdem, span, radius, velocity, mass, zone):
-    assert abs(coupled_against_fem(femdem, span, radius, velocity, mass, zone)) < 0.03
+def test_beam_impact_coupled_equals_fem_over_wide_samples(femdem, **draw):
+    assert abs(coupled_against_fem(femdem, **draw)) < 0.03
 
 
 @pytest.mark.slow
@@ -149,17 +143,20 @@ def test_beam_impact_3d_coarse(femdem):
 @pytest.mark.slow  # the 3D plate's equivalence runs in the default suite (tests/test_study.py)
 @settings(max_examples=3, deadline=None, phases=[Phase.explicit, Phase.generate],
           suppress_health_check=[HealthCheck.function_scoped_fixture])
-@example(span=50e-3, spacings=5)  # the case file's strip
-@given(span=st.floats(40e-3, 80e-3), spacings=st.integers(5, 40))
-def test_beam_impact_3d_coupled_equals_fem_when_elastic(femdem, span, spacings):
-    """3D, damage out of reach, to past the peak, over the case's span and width (half the
-    width whole particle spacings of 0.3 mm, 3-24 mm): the coupled strip (lattice + Hex8, tied
-    on a face) and the all-Hex8 strip give the same peak centre deflection within 3 %."""
+@example(span=50e-3, spacings=5, layup="[0_6/90_4/0_6]", support="clamped")  # the case file's strip
+@given(span=st.floats(40e-3, 80e-3), spacings=st.integers(5, 40), layup=verified(BEAM_RANGES["laminates.beam.layup"]),
+       support=verified(BEAM_RANGES["supports.clamps.condition"]))
+def test_beam_impact_3d_coupled_equals_fem_when_elastic(femdem, span, spacings, layup, support):
+    """3D, damage out of reach, to past the peak, over the case's span, width (half of it whole
+    particle spacings of 0.3 mm, 3-24 mm), layups and supports: the coupled strip (lattice +
+    Hex8, tied on a face) and the all-Hex8 strip give the same peak centre deflection within 3 %."""
+    slower = later_peak(layup, support)  # past the peak
     peaks = {}
     for mode in ("fem", "coupled"):
         code, s, err = femdem("run", unranged("beam_impact_3d_coarse"), "--mode", mode, *DEM[mode], *ELASTIC,
                               f"--set=geometry.span={span!r}", f"--set=geometry.width={2 * spacings * 0.3e-3!r}",
-                              f"--set=clock.t_end={0.15e-3 * (span / 50e-3) ** 1.5!r}")
+                              f"--set=laminates.beam.layup={layup}", f"--set=supports.clamps.condition={support}",
+                              f"--set=clock.t_end={0.15e-3 * slower * (span / 50e-3) ** 1.5!r}")
         assert code == 0, err
         peaks[mode] = s["qoi"]["peak_centre_displacement"]
     assert abs(peaks["coupled"] / peaks["fem"] - 1) < 0.03, peaks
@@ -193,12 +190,12 @@ def test_a_run_off_the_case_files_specimen_says_what_is_not_verified(femdem):
     """A key changed outside the case's [ranges] is named as not verified, a ranged one is not;
     test data measured on the file's specimen are not compared with another specimen (issue #22)."""
     short = ["--mode", "fem", "--set=clock.t_end=1e-4"]
-    code, s, err = femdem("run", "cfrp_beam_impact_coarse", *short, "--set=loads.drop.time_scale=1.2e-3",
+    code, s, err = femdem("run", "cfrp_beam_impact_coarse", *short, "--set=loads.drop.value_scale=1.2e3",
                           "--set=materials.concrete.E=30e9")
     assert code == 0, err
     (loose, data) = s["warnings"]
-    assert loose.startswith("not verified: loads.drop.time_scale = 0.0012 (") and "concrete.E " not in loose
-    assert "crack_initiation_time" in data and "loads.drop.time_scale, materials.concrete.E" in data
+    assert loose.startswith("not verified: loads.drop.value_scale = 1200.0 (") and "concrete.E " not in loose
+    assert "crack_initiation_time" in data and "loads.drop.value_scale, materials.concrete.E" in data
     assert all(w in err for w in s["warnings"])
     code, s, err = femdem("run", "cfrp_beam_impact_coarse", *short, "--set=materials.concrete.E=30e9",
                           "--set=mesh.max_size=20e-3")  # a ranged key, and how rather than what is simulated
@@ -304,7 +301,7 @@ def test_rod_impact_coarse_fem_and_coupled(femdem):
 
 
 ROD_RANGES = tomllib.loads((ROOT / "cases" / "seed" / "rod_impact_coarse.toml").read_text())["ranges"]
-_rod_draw = {k.replace(".", "_"): st.floats(*v) for k, v in ROD_RANGES.items()}
+_rod_draw = {k.replace(".", "_"): verified(v) for k, v in ROD_RANGES.items()}
 
 
 def _rod_run(femdem, values: dict, mode: str, dem: str = "", extra=()):
@@ -571,8 +568,7 @@ def test_film_closed_form_tends_to_rigid_clamps_for_a_stiff_ply():
     assert ratio({**p, "delaminations.film.sublaminate_plies": 8}) < ratio(p)
 
 
-PLY_RANGES = dict(E11=st.floats(80e9, 200e9), E22=st.floats(6e9, 12e9), G12=st.floats(3e9, 7e9),
-                  nu12=st.floats(0.2, 0.35), rho=st.floats(1400.0, 1800.0))
+PLY_RANGES = {k: verified(BEAM_RANGES[f"materials.graphite_epoxy.{k}"]) for k in ("E11", "E22", "G12", "nu12", "rho")}
 
 
 @settings(max_examples=1, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.generate],
@@ -607,16 +603,15 @@ def test_beam_impact_checks_hold_over_ply_materials(femdem, dem, E11, E22, G12, 
     assert_checks(s)
 
 
-BEAM_RANGES = tomllib.loads((ROOT / "cases" / "seed" / "beam_impact_coarse.toml").read_text())["ranges"]
 # every verified key drawn at once; G23 follows from E22 and nu23 (a transversely isotropic ply)
-_beam_draw = {k.replace(".", "_"): st.floats(*v) for k, v in BEAM_RANGES.items() if not k.endswith(".G23")}
+_beam_draw = {k.replace(".", "_"): verified(v) for k, v in BEAM_RANGES.items() if not k.endswith(".G23")}
 
 
 def _beam_sets(draw: dict) -> list[str]:
     values = {k: draw[k.replace(".", "_")] for k in BEAM_RANGES if not k.endswith(".G23")}
     m = "materials.graphite_epoxy."
     values[m + "G23"] = float(np.clip(values[m + "E22"] / (2 * (1 + values[m + "nu23"])), *BEAM_RANGES[m + "G23"]))
-    return [f"--set={k}={v!r}" for k, v in values.items()]
+    return [f"--set={k}={v if isinstance(v, str) else repr(v)}" for k, v in values.items()]
 
 
 @settings(max_examples=1, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.generate],
@@ -639,6 +634,37 @@ def test_beam_impact_checks_hold_anywhere_in_its_ranges_on_every_engine(femdem, 
     code, s, err = femdem("run", "beam_impact_coarse", "--dem", dem, *_beam_sets(draw))
     assert code == 0, err
     assert_checks(s)
+
+
+@pytest.mark.parametrize("case", ["beam_impact_coarse", "beam_impact_3d_coarse", "rod_impact_coarse"])
+def test_every_corner_of_the_moduli_ranges_is_a_lattice_that_exists(case):
+    """The [ranges] of the ply's moduli are a box, and a central-force lattice cannot carry every
+    shear modulus (square: G below E; cubic: less): the lattice calibrates at each of the box's
+    64 corners (E11, E22, G12, G23, nu12, nu23), so no draw inside the ranges is refused."""
+    import itertools
+    from coupling.case import load_case
+    from coupling.study.assemble import particle_zone
+    from dem_region import ply_block
+    ranges = tomllib.loads((ROOT / "cases" / "seed" / f"{case}.toml").read_text())["ranges"]
+    (m,) = {k.rsplit(".", 1)[0] for k in ranges if k.endswith(".E22")}
+    keys = [f"{m}.{k}" for k in ("E11", "E22", "G12", "G23", "nu12", "nu23")]
+    for corner in itertools.product(*(ranges[k] for k in keys)):
+        if case.startswith("rod"):  # the disc's cubic lattice, 0 and 90 plies
+            E11, E22, G12, G23 = corner[:4]
+            ply_block.calibrate(np.array([E11, E22, E22]), np.array([G23, G12, G12]))
+            continue
+        p = load_case(case, dict(zip(keys, corner))).parameters
+        particle_zone(p, 4 * p[f"laminates.{p['geometry.laminate']}.ply_thickness"], tied=False, clamped=True)
+
+
+@pytest.mark.parametrize("case", ["beam_impact_coarse", "beam_impact_3d_coarse"])
+def test_a_shear_modulus_no_lattice_carries_is_refused_naming_it(femdem, case):
+    """Outside the ranges (a case file without them): G12 = 7 GPa on E22 = 6 GPa is refused
+    in one line naming the key (exit 2; the slice's square lattice raised a ValueError, exit 1)."""
+    code, s, err = femdem("run", unranged(case), "--set=materials.graphite_epoxy.E22=6e9",
+                          "--set=materials.graphite_epoxy.G12=7e9", "--set=materials.graphite_epoxy.nu23=0.3",
+                          "--set=clock.t_end=1e-6")
+    assert code == 2 and "materials.graphite_epoxy.G12 = 7e+09" in err and "Traceback" not in err, err
 
 
 COHESIVE = ["--set=laminates.beam.far_field_interfaces=cohesive"]

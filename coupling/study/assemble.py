@@ -489,7 +489,11 @@ def _particle_zone(built: Built, x_end: float, tied: bool, clamped: bool):
     lam, d = built.lam, built.t
     k = round(d / lam.ply_thickness)
     mat = lam.material(moduli={a: ply_lattice.slice_moduli(lam.D(a)) for a in set(lam.angles)})
-    lat = ply_lattice.build(0.0, int(round(x_end / d)) + 1, 0.0, [n // k for n in lam.plies], lam.angles, d, mat)
+    try:
+        lat = ply_lattice.build(0.0, int(round(x_end / d)) + 1, 0.0, [n // k for n in lam.plies], lam.angles, d, mat)
+    except ValueError as exc:  # a shear modulus the square lattice cannot carry
+        material = built.p[f"laminates.{built.p['geometry.laminate']}.material"]
+        raise CaseError(f"materials.{material}.G12 = {lam.ply['G12']:g}: {exc}") from None
     last = lat.column == lat.column.max()
     on_plane = (lat.column == 0) | (last & tied)  # half cells
     l = lat.x[lat.intra_pairs[:, 1]] - lat.x[lat.intra_pairs[:, 0]]
