@@ -637,34 +637,45 @@ def test_beam_impact_checks_hold_anywhere_in_its_ranges_on_every_engine(femdem, 
 
 
 @pytest.mark.parametrize("case", ["beam_impact_coarse", "beam_impact_3d_coarse", "rod_impact_coarse"])
-def test_every_corner_of_the_moduli_ranges_is_a_lattice_that_exists(case):
-    """The [ranges] of the ply's moduli are a box, and a central-force lattice cannot carry every
-    shear modulus (square: G below E; cubic: less): the lattice calibrates at each of the box's
-    64 corners (E11, E22, G12, G23, nu12, nu23), so no draw inside the ranges is refused."""
+def test_every_corner_of_the_lattice_ranges_builds(case):
+    """The [ranges] are a box, and a central-force lattice cannot carry every shear modulus
+    (square: G below E; cubic: less), nor soften linearly from a strength whose elastic energy
+    Z0^2 / (2 K) exceeds its toughness (K = E22 / d): the particle zone builds at each corner of
+    the moduli, the ply thickness and the interface (2^11), so no draw inside them is refused."""
     import itertools
     from coupling.case import load_case
     from coupling.study.assemble import particle_zone
     from dem_region import ply_block
     ranges = tomllib.loads((ROOT / "cases" / "seed" / f"{case}.toml").read_text())["ranges"]
     (m,) = {k.rsplit(".", 1)[0] for k in ranges if k.endswith(".E22")}
-    keys = [f"{m}.{k}" for k in ("E11", "E22", "G12", "G23", "nu12", "nu23")]
-    for corner in itertools.product(*(ranges[k] for k in keys)):
-        if case.startswith("rod"):  # the disc's cubic lattice, 0 and 90 plies
-            E11, E22, G12, G23 = corner[:4]
+    moduli = [f"{m}.{k}" for k in ("E11", "E22", "G12", "G23", "nu12", "nu23")]
+    if case.startswith("rod"):  # the disc's cubic lattice of 0 and 90 plies (its interface: the case's comment)
+        for E11, E22, G12, G23 in itertools.product(*(ranges[k] for k in moduli[:4])):
             ply_block.calibrate(np.array([E11, E22, E22]), np.array([G23, G12, G12]))
-            continue
-        p = load_case(case, dict(zip(keys, corner))).parameters
-        particle_zone(p, 4 * p[f"laminates.{p['geometry.laminate']}.ply_thickness"], tied=False, clamped=True)
+        return
+    keys = moduli + ["laminates.beam.ply_thickness"] + [f"interfaces.table1.{k}" for k in ("Z0", "R0", "GIc", "GIIc")]
+    for corner in itertools.product(*(ranges[k] for k in keys)):
+        values = dict(zip(keys, corner))
+        if "3d" in case:  # the strip's half width in whole particle spacings (two plies each)
+            d = 2 * values["laminates.beam.ply_thickness"]
+            values["geometry.width"] = 2 * d * np.ceil(ranges["geometry.width"][0] / (2 * d) - 1e-9)
+        p = load_case(case, values).parameters
+        particle_zone(p, 2 * p["laminates.beam.ply_thickness"], tied=False, clamped=True)
 
 
 @pytest.mark.parametrize("case", ["beam_impact_coarse", "beam_impact_3d_coarse"])
-def test_a_shear_modulus_no_lattice_carries_is_refused_naming_it(femdem, case):
-    """Outside the ranges (a case file without them): G12 = 7 GPa on E22 = 6 GPa is refused
-    in one line naming the key (exit 2; the slice's square lattice raised a ValueError, exit 1)."""
-    code, s, err = femdem("run", unranged(case), "--set=materials.graphite_epoxy.E22=6e9",
-                          "--set=materials.graphite_epoxy.G12=7e9", "--set=materials.graphite_epoxy.nu23=0.3",
-                          "--set=clock.t_end=1e-6")
-    assert code == 2 and "materials.graphite_epoxy.G12 = 7e+09" in err and "Traceback" not in err, err
+@pytest.mark.parametrize("sets, key", [
+    (["materials.graphite_epoxy.E22=6e9", "materials.graphite_epoxy.G12=7e9", "materials.graphite_epoxy.nu23=0.3"],
+     "materials.graphite_epoxy.G12 = 7e+09"),
+    (["materials.graphite_epoxy.E22=7e9", "interfaces.table1.Z0=80e6", "interfaces.table1.GIc=100",
+      "laminates.beam.ply_thickness=0.2e-3", "geometry.width=3.2e-3"], "interfaces.table1.GIc = 100: below")])
+def test_a_lattice_that_cannot_be_built_is_refused_naming_the_key(femdem, case, sets, key):
+    """Outside the ranges (a case file without them): a shear modulus no lattice carries (G12 =
+    7 GPa on E22 = 6 GPa) and a toughness below the particles' elastic energy at initiation
+    (Z0^2 / 2K) are refused in one line naming the key (exit 2; the 2D slice raised a
+    ValueError for both, exit 1, the 3D block for the second)."""
+    code, s, err = femdem("run", unranged(case), *[f"--set={v}" for v in sets], "--set=clock.t_end=1e-6")
+    assert code == 2 and key in err and "Traceback" not in err, err
 
 
 COHESIVE = ["--set=laminates.beam.far_field_interfaces=cohesive"]
