@@ -65,13 +65,15 @@ class Param:
                 raise bad
             return value
         if self.kind == "str":
-            if not isinstance(value, str) or (self.choices and value not in self.choices):
+            if not isinstance(value, str):
                 raise bad
-            if self.check is not None:
+            if self.check is not None:  # what is malformed first, then whether it is one of the choices
                 try:
                     self.check(value)
                 except ValueError as exc:
                     raise CaseError(f"{key} = {value!r}: {exc}") from None
+            if self.choices and value not in self.choices:
+                raise bad
             return value
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise bad
