@@ -462,9 +462,9 @@ BEAM_3D_RANGES = tomllib.loads((ROOT / "cases" / "seed" / "beam_impact_3d_coarse
 
 
 @pytest.mark.slow
-@settings(max_examples=4, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
-@given(dem=st.sampled_from(["liggghts", "lammps"]),
-       **{k.replace(".", "_"): verified(v) for k, v in BEAM_3D_RANGES.items() if not k.endswith(".G23")})
+@pytest.mark.parametrize("dem", ["liggghts", "lammps", "yade"])
+@settings(max_examples=2, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(**{k.replace(".", "_"): verified(v) for k, v in BEAM_3D_RANGES.items() if not k.endswith(".G23")})
 def test_the_3d_beam_holds_its_bracket_anywhere_in_its_ranges(femdem, dem, **draw):
     """The 3D seed strip, coupled, every verified key drawn at once (the span and width, the
     layup and supports, the impact, the ply's moduli, strengths and fracture energies, the interface, the ply thickness,
