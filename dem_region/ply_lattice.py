@@ -23,7 +23,7 @@ import numpy as np
 
 from physics.failure import HoffmanStrengths
 
-from physics.laws import HashinCohesiveLaw, PlyBondLaw
+from physics.laws import PlyBondLaw
 from .scene import check_fits
 
 
@@ -147,8 +147,3 @@ def build(x0: float, n_columns: int, y0: float, rows_per_ply: list[int], angles:
     return PlyLattice(x, d / 2, np.full(len(x), sphere_rho), ply_of_row[row], col, row,
                       np.array(pairs, int).reshape(-1, 2), law, np.array(inter, int).reshape(-1, 2), E_y / d, d,
                       along)
-
-
-def interlaminar_law(lattice: PlyLattice, Z0: float, R0: float, GIc: float, GIIc: float, eta: float = 2.284,
-                     mixed_mode: str = "bk") -> HashinCohesiveLaw:
-    return HashinCohesiveLaw(K=lattice.inter_K, Z0=Z0, R0=R0, GIc=GIc, GIIc=GIIc, eta=eta, mixed_mode=mixed_mode)

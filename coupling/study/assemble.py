@@ -482,18 +482,18 @@ def _far_field_bonds(p: dict, built: Built, dyn: ExplicitDynamics) -> LawBonds |
     return cohesive_node_bonds(dyn, pairs, area, law, itf["friction"])
 
 
-def _interlaminar_law(built: Built, K: float) -> HashinCohesiveLaw:
-    """The particles' interface law at the lattice's penalty K = E_transverse / d (Pa/m); a
-    toughness below the elastic energy at initiation, tau^2 / (2 K), is refused naming its keys
-    (linear softening cannot start there)."""
-    p, itf = built.p, built.lam.interface
+def interlaminar_law(p: dict, lam, K: float, d: float) -> HashinCohesiveLaw:
+    """The particles' interface law of laminate ``lam`` at the lattice's penalty K = E_transverse
+    / d (Pa/m, d the particle size in m); a toughness below the elastic energy at initiation,
+    tau^2 / (2 K), is refused naming its keys (linear softening cannot start there)."""
+    itf = lam.interface
     name = p[f"laminates.{p['geometry.laminate']}.interface"]
     for tau, gc in (("Z0", "GIc"), ("R0", "GIIc")):
         need = itf[tau] ** 2 / (2 * K)
         if itf[gc] < need:
             raise CaseError(f"interfaces.{name}.{gc} = {itf[gc]:g}: below the elastic energy at initiation "
                             f"{tau}^2 / (2 K) = {need:.4g} J/m^2 of the particles (K = {K:.4g} Pa/m, the transverse "
-                            f"modulus over the particle size {built.t:g} m); allowed: {gc} >= that, a lower {tau}, "
+                            f"modulus over the particle size {d:g} m); allowed: {gc} >= that, a lower {tau}, "
                             "a stiffer ply or smaller particles")
     return HashinCohesiveLaw(K=K, Z0=itf["Z0"], R0=itf["R0"], GIc=itf["GIc"], GIIc=itf["GIIc"])
 
@@ -515,7 +515,7 @@ def _particle_zone(built: Built, x_end: float, tied: bool, clamped: bool):
     l = lat.x[lat.intra_pairs[:, 1]] - lat.x[lat.intra_pairs[:, 0]]
     intra = LawBonds(lat.intra_pairs, lat.x, l, np.where(on_plane[lat.intra_pairs].all(axis=1), 0.5, 1.0) * d * d,
                      lat.intra_law, volume=lat.cell_volume() * np.where(on_plane, 0.5, 1.0), label="intralaminar")
-    law = _interlaminar_law(built, lat.inter_K)
+    law = interlaminar_law(built.p, lam, lat.inter_K, d)
     inter = LawBonds(lat.inter_pairs, lat.x, np.tile([0.0, 1.0, 0.0], (len(lat.inter_pairs), 1)),
                      np.where(on_plane[lat.inter_pairs].all(axis=1), 0.5, 1.0) * d * d, law,
                      friction=lam.interface["friction"], label="interlaminar", along=lat.inter_along)
@@ -558,7 +558,7 @@ def _block_with_laws(built: Built, columns: tuple[int, int], half: list, cells: 
     intra = LawBonds(block.intra_pairs, block.x, l, block.intra_area, block.intra_law, volume=block.volume,
                      label="intralaminar")
     itf = lam.interface
-    law = _interlaminar_law(built, block.inter_K)
+    law = interlaminar_law(p, lam, block.inter_K, d)
     inter = LawBonds(block.inter_pairs, block.x, np.tile([0.0, 0.0, 1.0], (len(block.inter_pairs), 1)),
                      block.inter_area, law, friction=itf["friction"], along=block.inter_along, label="interlaminar")
     return block, intra, inter

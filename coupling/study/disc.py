@@ -39,7 +39,7 @@ from ..params import CaseError
 from ..participants.coupled import coupled_simulation
 from ..participants.dem import hold_symmetry_planes
 from ..participants.fem import cohesive_node_bonds, energies_with, fem_only
-from .assemble import Built, body_of
+from .assemble import Built, body_of, interlaminar_law
 from .closed_forms import SMALL_MASS, disc_mass_ratio
 from .schema import section
 
@@ -293,11 +293,7 @@ def _particle_zone(p: dict, built: Built, rod_name: str, penalty: float):
     intra = LawBonds(block.intra_pairs, block.x, l, block.intra_area, block.intra_law, volume=block.volume,
                      label="intralaminar")
     itf = lam.interface
-    try:
-        law = ply_block.interlaminar_law(block, itf["Z0"], itf["R0"], itf["GIc"], itf["GIIc"])
-    except ValueError as exc:
-        raise CaseError(f"interfaces.{names['interface']}.GIc = {itf['GIc']:g}: on the particle lattice (K = E22 / d "
-                        f"= {block.inter_K:.3g} Pa/m) {exc}") from None
+    law = interlaminar_law(p, lam, block.inter_K, d)
     inter = LawBonds(block.inter_pairs, block.x, np.tile([0.0, 0.0, 1.0], (len(block.inter_pairs), 1)),
                      block.inter_area, law, friction=itf["friction"], along=block.inter_along, label="interlaminar")
     i, j, k = block.index.T
