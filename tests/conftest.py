@@ -9,6 +9,7 @@ if int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1")) > 1:
 import coupling  # noqa: E402, F401  (first: it sets the BLAS threads before numpy loads)
 import json
 import tempfile
+import tomllib
 from pathlib import Path
 
 import pytest
@@ -53,6 +54,16 @@ def assert_checks(summary):
     assert summary["checks"], "a verification case must record checks"
     for name, c in summary["checks"].items():
         assert c["passed"], f"{name}: {c}"
+
+
+def seed_ranges(case: str) -> dict:
+    """The [ranges] of cases/seed/CASE.toml: {key: [low, high] or [verified values]}."""
+    return tomllib.loads((SEED_CASES / f"{case}.toml").read_text())["ranges"]
+
+
+def set_args(values: dict) -> list[str]:
+    """--set arguments for {key: value}: numbers by repr (every digit), text as it is."""
+    return [f"--set={k}={v if isinstance(v, str) else repr(v)}" for k, v in values.items()]
 
 
 def verified(entry: list):

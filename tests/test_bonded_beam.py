@@ -10,6 +10,8 @@ import pytest
 from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
+from conftest import set_args, verified
+
 ROOT = Path(__file__).resolve().parents[1]
 CFRP = ROOT / "cases" / "seed" / "cfrp_beam_impact_coarse.toml"
 
@@ -99,14 +101,13 @@ def ranged_draw(case: str):
     data = tomllib.loads((ROOT / "cases" / "seed" / f"{case}.toml").read_text())
     ranges, d = data["ranges"], data["zone"]["particle_size"]
     whole = {"geometry.depth": d, **({"geometry.width": 2 * d} if data["geometry"]["shape"].endswith("_3d") else {})}
-    draws = {k: st.integers(*v) if all(isinstance(x, int) for x in v) else st.floats(*v)
-             for k, v in ranges.items() if k not in whole}
+    draws = {k: verified(v) for k, v in ranges.items() if k not in whole}
     draws.update({k: st.integers(math.ceil(ranges[k][0] / step - 1e-9), math.floor(ranges[k][1] / step + 1e-9)).map(
         lambda n, step=step: n * step) for k, step in whole.items()})
 
     def sets(values):
         t_end = 0.45e-3 * values["loads.drop.time_scale"] / data["loads"]["drop"]["time_scale"]
-        return [f"--set={k}={x!r}" for k, x in values.items()] + [f"--set=clock.t_end={t_end!r}"]
+        return set_args({**values, "clock.t_end": t_end})
     return st.fixed_dictionaries(draws).map(sets)
 
 

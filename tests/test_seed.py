@@ -1,6 +1,5 @@
 """The seed paper's examples (issue 9): coarse variants with their checks, and the coupled
 model against its standalone references when nothing breaks."""
-import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -11,7 +10,7 @@ from hypothesis import strategies as st
 # the engine for the modes that run one (--dem with --mode fem is refused: it changes nothing)
 DEM = {"fem": [], "coupled": ["--dem", "liggghts"], "dem": ["--dem", "liggghts"]}
 
-from conftest import assert_checks, later_peak, unranged, verified
+from conftest import assert_checks, later_peak, seed_ranges, set_args, unranged, verified
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -42,7 +41,7 @@ def test_beam_impact_coupled_equals_fem_when_elastic(femdem):
     assert abs(peaks["coupled"] / peaks["fem"] - 1) < 0.03
 
 
-BEAM_RANGES = tomllib.loads((ROOT / "cases" / "seed" / "beam_impact_coarse.toml").read_text())["ranges"]
+BEAM_RANGES = seed_ranges("beam_impact_coarse")
 BEAM_GEOMETRY = dict(span=st.floats(20e-3, 40e-3), radius=st.floats(3e-3, 8e-3), velocity=st.floats(2.0, 12.0),
                      mass=st.floats(0.3, 1.2), zone=st.floats(0.25, 0.5),
                      layup=verified(BEAM_RANGES["laminates.beam.layup"]),
@@ -248,7 +247,7 @@ def test_cfrp_beam_impact_coupled_equals_fem_when_elastic(femdem):
     assert abs(peaks["coupled"] / peaks["fem"] - 1) < 0.03, peaks
 
 
-CFRP_RANGES = tomllib.loads((ROOT / "cases" / "seed" / "cfrp_beam_impact_coarse.toml").read_text())["ranges"]
+CFRP_RANGES = seed_ranges("cfrp_beam_impact_coarse")
 
 
 @settings(max_examples=3, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.generate],
@@ -300,7 +299,7 @@ def test_rod_impact_coarse_fem_and_coupled(femdem):
         assert abs(q["coupled"][key] / q["reference"][key] - 1) < tol, (key, q)
 
 
-ROD_RANGES = tomllib.loads((ROOT / "cases" / "seed" / "rod_impact_coarse.toml").read_text())["ranges"]
+ROD_RANGES = seed_ranges("rod_impact_coarse")
 _rod_draw = {k.replace(".", "_"): verified(v) for k, v in ROD_RANGES.items()}
 
 
@@ -313,7 +312,7 @@ def _rod_run(femdem, values: dict, mode: str, dem: str = "", extra=()):
     a = min(d * np.floor(a_max / d + 1e-9), a_max)  # whole spacings, never a rounding above the limit
     zone = [f"--set=zone.particle_size={d!r}", f"--set=zone.half_width={a!r}"]
     return femdem("run", "rod_impact_coarse", "--mode", mode, *(["--dem", dem] if dem else []),
-                  *[f"--set={k}={v!r}" for k, v in values.items()], *(zone if mode == "coupled" else []), *extra)
+                  *set_args(values), *(zone if mode == "coupled" else []), *extra)
 
 
 @settings(max_examples=2, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.generate],
@@ -391,13 +390,13 @@ def test_rod_impact_bad_settings_are_caught(femdem):
     assert code == 3 and "penetrates" in s["message"], (code, err)
 
 
-PANEL_RANGES = tomllib.loads((ROOT / "cases" / "seed" / "panel_buckling_coarse.toml").read_text())["ranges"]
+PANEL_RANGES = seed_ranges("panel_buckling_coarse")
 # every key of the panel's [ranges] at once (the sublaminate's plies an integer)
 PANEL = st.fixed_dictionaries({k: (st.integers if k.endswith("_plies") else st.floats)(*v) for k, v in PANEL_RANGES.items()})
 
 
 def _panel_run(femdem, mode, panel: dict, *extra):
-    return femdem("run", "panel_buckling_coarse", "--mode", mode, *[f"--set={k}={v!r}" for k, v in panel.items()], *extra)
+    return femdem("run", "panel_buckling_coarse", "--mode", mode, *set_args(panel), *extra)
 
 
 @settings(max_examples=1, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.generate],
@@ -611,7 +610,7 @@ def _beam_sets(draw: dict) -> list[str]:
     values = {k: draw[k.replace(".", "_")] for k in BEAM_RANGES if not k.endswith(".G23")}
     m = "materials.graphite_epoxy."
     values[m + "G23"] = float(np.clip(values[m + "E22"] / (2 * (1 + values[m + "nu23"])), *BEAM_RANGES[m + "G23"]))
-    return [f"--set={k}={v if isinstance(v, str) else repr(v)}" for k, v in values.items()]
+    return set_args(values)
 
 
 @settings(max_examples=1, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.generate],
@@ -646,7 +645,7 @@ def test_every_corner_of_the_lattice_ranges_builds(case):
     from coupling.case import load_case
     from coupling.study.assemble import particle_zone
     from dem_region import ply_block
-    ranges = tomllib.loads((ROOT / "cases" / "seed" / f"{case}.toml").read_text())["ranges"]
+    ranges = seed_ranges(case)
     (m,) = {k.rsplit(".", 1)[0] for k in ranges if k.endswith(".E22")}
     moduli = [f"{m}.{k}" for k in ("E11", "E22", "G12", "G23", "nu12", "nu23")]
     if case.startswith("rod"):  # the disc's cubic lattice of 0 and 90 plies (its interface: the case's comment)

@@ -3,7 +3,6 @@ exists only as a TOML file run in every mode on every engine against its closed 
 seed beam's study over its verified ranges."""
 import subprocess
 import sys
-import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -12,7 +11,7 @@ import pytest
 from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
-from conftest import assert_checks, later_peak, unranged, verified
+from conftest import assert_checks, later_peak, seed_ranges, set_args, unranged, verified
 
 ROOT = Path(__file__).resolve().parents[1]
 BEND = ROOT / "tests" / "studies" / "three_point_bend.toml"
@@ -458,7 +457,7 @@ def test_the_3d_beam_holds_its_bracket_over_its_impacts(femdem, radius, velocity
     assert_checks(s)
 
 
-BEAM_3D_RANGES = tomllib.loads((ROOT / "cases" / "seed" / "beam_impact_3d_coarse.toml").read_text())["ranges"]
+BEAM_3D_RANGES = seed_ranges("beam_impact_3d_coarse")
 
 
 @pytest.mark.slow
@@ -483,7 +482,7 @@ def test_the_3d_beam_holds_its_bracket_anywhere_in_its_ranges(femdem, dem, **dra
     values["geometry.width"] = 2 * d * int(np.clip(round(values["geometry.width"] / (2 * d)),
                                                    np.ceil(low / (2 * d)), np.floor(high / (2 * d))))
     code, s, err = femdem("run", "beam_impact_3d_coarse", "--dem", dem,
-                          *[f"--set={k}={v if isinstance(v, str) else repr(v)}" for k, v in values.items()],
+                          *set_args(values),
                           f"--set=clock.t_end={t_end}")
     assert code == 0, err
     assert_checks(s)
