@@ -166,20 +166,16 @@ def build(origin, n_columns: tuple[int, int], rows_per_ply: list[int], angles: l
     law.Gf = np.where(gf > 0, gf, positive[:, None])
     area = d**2 * _in_plane_factor(index, cut, intra)
 
-    # interlaminar pairs: vertical, across each change of ply
+    # interlaminar pairs: vertical, across each change of ply; numbered column by column (the
+    # interfaces of a column together), as the particles are, so that a pass over the bonds
+    # reads the particles in order
     rows = np.flatnonzero(ply_of_row[:-1] != ply_of_row[1:])
-    inter, along = [], []
-    base = 0
-    for k in rows:
-        ii, jj = np.meshgrid(np.arange(nx), np.arange(ny), indexing="ij")
-        ii, jj = ii.ravel(), jj.ravel()
-        inter.append(np.column_stack([flat(ii, jj, k), flat(ii, jj, k + 1)]))
-        m = base + ii * ny + jj
-        along.append(np.column_stack([np.where(ii > 0, m - ny, -1), np.where(ii < nx - 1, m + ny, -1),
-                                      np.where(jj > 0, m - 1, -1), np.where(jj < ny - 1, m + 1, -1)]))
-        base += nx * ny
-    inter = np.vstack(inter) if inter else np.zeros((0, 2), int)
-    along = np.vstack(along) if along else np.zeros((0, 4), int)
+    R = len(rows)
+    ii, jj, kk = (a.ravel() for a in np.meshgrid(np.arange(nx), np.arange(ny), rows, indexing="ij"))
+    inter = np.column_stack([flat(ii, jj, kk), flat(ii, jj, kk + 1)]).reshape(-1, 2)
+    m = np.arange(len(inter))
+    along = np.column_stack([np.where(ii > 0, m - ny * R, -1), np.where(ii < nx - 1, m + ny * R, -1),
+                             np.where(jj > 0, m - R, -1), np.where(jj < ny - 1, m + R, -1)]).reshape(-1, 4)
     E_z = min(engineering(material, a)[0][2] for a in angles)
     sphere = 4.0 / 3.0 * np.pi * (d / 2) ** 3
     return PlyBlock(x, d / 2, material.rho * volume / sphere, ply_of_row[K], index, volume, intra, area, law,

@@ -49,6 +49,7 @@ from .laws import friction_traction
 
 
 _LAW_STATE = ("m0", "mf", "crushed", "snapback")  # what a stateful law carries between steps
+INDEX = np.int32  # the fused step's index arrays: half the bytes a bond reads of int64's
 
 
 @dataclass
@@ -218,7 +219,7 @@ class LawBonds:
         kernels; any other (positions_of / add_forces) through a copy of its particles."""
         if hasattr(target, "rows_of"):
             if self._bound is not target:  # bind once: this family's particles as rows of the target's arrays
-                self._rows = np.ascontiguousarray(target.rows_of(self.ids), np.int64)
+                self._rows = np.ascontiguousarray(target.rows_of(self.ids), INDEX)
                 self._end, self._bound = self._rows[self._loc], target
             self._step(target.x, target.f, self._rows, self._end, dt)
             return
@@ -335,15 +336,15 @@ class _FusedPlan:
         big = nb >= law_kernels.PARALLEL_BONDS and law_kernels.THREADS_ALLOWED
         self.bonds_pass = law_kernels.bonds_pass if big else law_kernels.bonds_pass_serial
         self.gather_pass = law_kernels.gather_pass if big else law_kernels.gather_pass_serial
-        self.loc = np.ascontiguousarray(bonds._loc, np.int64)
+        self.loc = np.ascontiguousarray(bonds._loc, INDEX)
         self.none, self.no = np.zeros(0), np.zeros(0, bool)  # stand-ins for what a family lacks
         dirs = bonds._dirs if bonds.along is not None else []
         if bonds.finite_rotation:
             self.kin = law_kernels.FRAME_2D if bonds.along is not None else law_kernels.CENTRAL
         else:
             self.kin = law_kernels.FIXED
-        self.dir_a = np.array([d[0] for d in dirs], np.int64).reshape(len(dirs), nb)
-        self.dir_b = np.array([d[1] for d in dirs], np.int64).reshape(len(dirs), nb)
+        self.dir_a = np.array([d[0] for d in dirs], INDEX).reshape(len(dirs), nb)
+        self.dir_b = np.array([d[1] for d in dirs], INDEX).reshape(len(dirs), nb)
         self.dir_e = np.array([d[2] for d in dirs], float).reshape(len(dirs), nb, 3)
         self.dir_h = np.array([d[3] for d in dirs], float).reshape(len(dirs), nb)
         self.X_mid = np.ascontiguousarray(getattr(bonds, "_X_mid", np.zeros((nb, 3))))
@@ -369,28 +370,30 @@ class _FusedPlan:
             # the few distinct ply orientations, and each bond's (72 bytes less to read per bond)
             self.axes, ply_axes = np.unique(law.axes.reshape(nb, 9), axis=0, return_inverse=True)
             self.axes = np.ascontiguousarray(self.axes.reshape(-1, 3, 3))
-            self.ply_axes = np.asarray(ply_axes, np.int64).ravel()
+            self.ply_axes = np.asarray(ply_axes, INDEX).ravel()
             aligned = [kernels.aligned_voigt(R) for R in self.axes]  # 0 / 90 plies: no rotation to do
-            self.aligned = (np.array(aligned, np.int64) if all(a is not None for a in aligned)
-                            else np.full((1, 6), -1, np.int64))
+            self.aligned = (np.array(aligned, INDEX) if all(a is not None for a in aligned)
+                            else np.full((1, 6), -1, INDEX))
             self.Gf = np.ascontiguousarray(law.Gf)
             # each particle's bonds in bond order (its Love-Weber stress)
             ends = self.loc.ravel()
             order = np.argsort(ends, kind="stable")
-            self.inc_bond = (order // 2).astype(np.int64)
-            self.inc_ptr = np.concatenate([[0], np.cumsum(np.bincount(ends, minlength=n))]).astype(np.int64)
+            self.inc_bond = (order // 2).astype(INDEX)
+            self.inc_ptr = np.concatenate([[0], np.cumsum(np.bincount(ends, minlength=n))]).astype(INDEX)
         else:
             self.law = law_kernels.HASHIN
             self.hk = (1.0,) * 9
             self.hp = np.array([law.K, law.Z0, law.R0, law.GIc, law.GIIc, law.eta, float(law.mixed_mode == "bk")])
             self.pstress, self.cell = np.zeros((0, 6)), np.zeros(0)
-            self.axes, self.ply_axes, self.Gf = np.zeros((0, 3, 3)), np.zeros(0, np.int64), np.zeros((0, 1))
-            self.aligned = np.full((1, 6), -1, np.int64)
-            self.inc_bond, self.inc_ptr = np.zeros(0, np.int64), np.zeros(n + 1, np.int64)
+            self.axes, self.ply_axes, self.Gf = np.zeros((0, 3, 3)), np.zeros(0, INDEX), np.zeros((0, 1))
+            self.aligned = np.full((1, 6), -1, INDEX)
+            self.inc_bond, self.inc_ptr = np.zeros(0, INDEX), np.zeros(n + 1, INDEX)
         # slots: 0 the force on the second end (the first takes minus it), then per tangent one
         # on the next pair (b) and one on the previous pair (a); entries sorted by (particle,
         # phase, bond, order), each 2 x slot (+ 1: minus sign)
         S = 1 + 2 * len(dirs)
+        if 2 * nb * S >= 2**31:
+            raise ValueError(f"{nb} law bonds: past the fused step's 32-bit indices")
         self.slots = np.zeros((nb, S, 3))
         self.slots_flat = self.slots.reshape(nb * S, 3)
         bonds.force = self.slots[:, 0]
@@ -409,5 +412,5 @@ class _FusedPlan:
         sub = np.concatenate([np.full(nb, k[1]) for k in key])
         bond = np.tile(m, len(key))
         by = np.lexsort((sub, bond, phase, particle))
-        self.entry = np.concatenate(slot)[by].astype(np.int64)
-        self.ptr = np.concatenate([[0], np.cumsum(np.bincount(particle, minlength=n))]).astype(np.int64)
+        self.entry = np.concatenate(slot)[by].astype(INDEX)
+        self.ptr = np.concatenate([[0], np.cumsum(np.bincount(particle, minlength=n))]).astype(INDEX)
