@@ -2,7 +2,7 @@
 
 Usage: .venv/bin/python benchmarks/coupled_step.py [--bonds 1e3 1e4 1e5 1e6] [--steps 20]
            [--repeat 5] [--runs beam_impact_coarse beam_impact] [--dem liggghts yade lammps]
-           [--run-set clock.t_end=2e-4] [--skip-runs] [--skip-kernels]
+           [--run-set clock.t_end=2e-4] [--skip-runs] [--skip-kernels] [--handshake]
 
 1. Kernels: the 3D quarter beam's lattice (beam_impact_3d: Hoffman ply bonds and Hashin
    interface bonds with two tangents' slope terms), widened and lengthened until each family
@@ -137,6 +137,57 @@ def yade_transfer(n: int = 1296, repeat: int = 200) -> dict:
     return out
 
 
+def _echo(name: str, rounds: int) -> None:
+    """The worker's side of handshake(): each advance one engine step with one hook, no work."""
+    from dem_region.doorbell import ADVANCE, DONE, GO, HOOK, Backoff, Doorbell
+    bell, wait = Doorbell(name), Backoff()
+    for k in range(1, rounds + 1):
+        while not bell.rung(ADVANCE, k):
+            wait()
+        wait.reset()
+        bell.ring(HOOK, k)
+        while not bell.rung(GO, k):
+            wait()
+        wait.reset()
+        bell.ring(DONE, k)
+    bell.close()
+
+
+def handshake(rounds: int = 20000, repeat: int = 5) -> list[float]:
+    """us per engine step of the worker handshake alone (dem_region.doorbell: advance, hook, go,
+    done; both sides spinning, no work between): the floor of the transport bucket of an engine
+    in a worker that steps once per clock step with the orchestrator's hook."""
+    from dem_region.doorbell import ADVANCE, DONE, GO, HOOK, Backoff, Doorbell
+    out = []
+    for _ in range(repeat):
+        bell = Doorbell()
+        # its own interpreter (as the engine's worker is): a child of multiprocessing would share
+        # this one's resource tracker, which the attached side's unregistering confuses
+        child = subprocess.Popen([sys.executable, "-c", f"import sys; sys.path.insert(0, {str(ROOT)!r}); "
+                                  f"from benchmarks.coupled_step import _echo; _echo({bell.name!r}, {rounds})"])
+        wait = Backoff()
+        try:
+            t0 = None
+            for k in range(1, rounds + 1):
+                if k == 101:  # past the child's start
+                    t0 = time.perf_counter()
+                bell.ring(ADVANCE, k)
+                while not bell.rung(HOOK, k):
+                    wait()
+                wait.reset()
+                bell.ring(GO, k)
+                while not bell.rung(DONE, k):
+                    wait()
+                wait.reset()
+            out.append((time.perf_counter() - t0) / (rounds - 100) * 1e6)
+            child.wait(timeout=30)
+        finally:
+            if child.poll() is None:
+                child.kill()
+            bell.close()
+    return out
+
+
 def run_case(case: str, dem: str, sets: list[str]) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "run"
@@ -173,7 +224,14 @@ def main():
     ap.add_argument("--yade-transfer", action="store_true",
                     help="only the paths between numpy and YADE, us per particle (YADE owns this process's OpenMP)")
     ap.add_argument("--skip-kernels", action="store_true")
+    ap.add_argument("--handshake", action="store_true",
+                    help="only the worker handshake between two processes, us per engine step")
     a = ap.parse_args()
+    if a.handshake:
+        us = handshake(repeat=a.repeat)
+        print(f"worker handshake alone: {statistics.median(us):.2f} us per engine step (median of {a.repeat}: "
+              + ", ".join(f"{u:.2f}" for u in us) + ")")
+        return
     if a.yade_transfer:
         for name, us in yade_transfer().items():
             print(f"{name:<36}{us:8.2f} us per particle")
