@@ -21,14 +21,19 @@ from multiprocessing.connection import Connection
 
 import numpy as np
 
-from dem_region import wire
+from dem_region import state_block, wire
 from dem_region.doorbell import ADVANCE, ASK, DONE, DT, ENGINE_S, GO, HOOK, MODELS_S, STEPS, Backoff, Doorbell
 
 
-def _attach(name: str, shape) -> tuple[shared_memory.SharedMemory, np.ndarray]:
+def _attach_block(name: str) -> shared_memory.SharedMemory:
     shm = shared_memory.SharedMemory(name=name)
     # Python < 3.13 registers attached blocks too and would unlink the parent's block at exit
     resource_tracker.unregister(shm._name, "shared_memory")  # noqa: SLF001
+    return shm
+
+
+def _attach(name: str, shape) -> tuple[shared_memory.SharedMemory, np.ndarray]:
+    shm = _attach_block(name)
     return shm, np.ndarray(shape, dtype=np.float64, buffer=shm.buf)
 
 
@@ -135,7 +140,7 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
     state = {"ids": np.zeros(0, int), "F": None, "V": None, "blocks": [], "in_hook": 0.0,
              "model_ids": None, "X_model": None, "F_model": None,
              "models": [], "view": None, "models_dt": 0.0, "in_models": 0.0, "ask": False,
-             "bell": None, "hooks": 0, "advances": 0}
+             "bell": None, "hooks": 0, "advances": 0, "state_shm": None, "state_views": None}
 
     def between():
         """The engine's coupling hook: the hosted models' step, interface forces out, then serve
@@ -219,8 +224,23 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
                 state["models"] = wire.loads(args[0])
                 state["view"] = ModelStep(backend, state["models"])
                 conn.send(("ok",))
-            elif op == "models_state":
-                conn.send(("ok", wire.dumps(model_states(state["models"]))))
+            elif op == "models_state":  # into the shared block made to the layout the orchestrator holds
+                states = model_states(state["models"])
+                entries, rest = state_block.layout(states)
+                if entries != args[0] or state["state_views"] is None:
+                    conn.send(("layout", entries))  # it makes a block to this layout and asks again
+                else:
+                    state_block.write(state["state_views"], entries, states)
+                    conn.send(("ok", wire.dumps(rest)))
+            elif op == "models_state_block":
+                if state["state_shm"] is not None:  # the models' layout changed: the old block goes
+                    state["state_views"] = None
+                    state["blocks"].remove(state["state_shm"])
+                    state["state_shm"].close()
+                shm = state["state_shm"] = _attach_block(args[0])
+                state["blocks"].append(shm)
+                state["state_views"] = state_block.views(shm.buf, args[1])
+                conn.send(("ok",))
             elif op == "set_models_state":
                 set_model_states(state["models"], wire.loads(args[0]))
                 conn.send(("ok",))

@@ -40,3 +40,48 @@ def test_the_other_numpy_reads_and_writes_what_this_one_does():
     back = wire.loads(done.stdout)
     with np.errstate(over="ignore"):  # the largest float doubled is inf on both sides
         assert back["a"].tobytes() == a.tobytes() and back["b"].tobytes() == (a * 2).tobytes()
+
+
+@given(st.data())
+@settings(max_examples=40, deadline=None)
+def test_model_states_cross_a_shared_block_bit_for_bit(data):
+    """dem_region/state_block.py: the hosted models' states written into a shared-memory block
+    by one side (its own attachment) and read back by the other are the states, bit for bit:
+    arrays of any numeric dtype and shape (0-d too), Python and numpy scalars with their kind,
+    and the values that are neither beside the block; what was read survives the block's
+    next rewrite."""
+    from multiprocessing import resource_tracker, shared_memory
+
+    from dem_region import state_block
+    states = []
+    for _ in range(data.draw(st.integers(1, 3))):
+        d = {}
+        for k in range(data.draw(st.integers(0, 4))):
+            d[f"a{k}"] = data.draw(hnp.arrays(data.draw(DTYPES), hnp.array_shapes(min_dims=0, max_dims=3, max_side=5)))
+        d["work"] = data.draw(st.floats(allow_nan=False))
+        d["snapback"] = data.draw(st.integers(-2**62, 2**62))
+        d["flag"] = data.draw(st.booleans())
+        d["label"] = data.draw(st.text(max_size=5))
+        states.append(d)
+    entries, rest = state_block.layout(states)
+    writer = shared_memory.SharedMemory(create=True, size=state_block.offsets(entries)[1])
+    reader = shared_memory.SharedMemory(name=writer.name)  # the other side's attachment
+    resource_tracker.unregister(reader._name, "shared_memory")  # noqa: SLF001
+    try:
+        state_block.write(state_block.views(writer.buf, entries), entries, states)
+        back = state_block.read(state_block.views(reader.buf, entries), entries, wire.loads(wire.dumps(rest)))
+        writer.buf[:] = bytes(writer.size)  # the next sync rewrites the block: what was read stays
+        for d, b in zip(states, back):
+            assert set(b) == set(d)
+            for k, v in d.items():
+                if isinstance(v, np.ndarray):
+                    assert b[k].dtype == v.dtype and b[k].shape == v.shape and b[k].tobytes() == v.tobytes()
+                else:
+                    assert type(b[k]) is type(v) and b[k] == v
+        # the block holds only the numeric entries, each on a float64 boundary
+        at, size = state_block.offsets(entries)
+        assert all(o % 8 == 0 for o in at) and size >= 8
+    finally:
+        reader.close()
+        writer.close()
+        writer.unlink()

@@ -22,7 +22,7 @@ from typing import Callable
 
 import numpy as np
 
-from .. import wire
+from .. import state_block, wire
 from ..doorbell import (ADVANCE, ASK, DONE, DT, ENGINE_S, GO, HOOK, MODELS_S, STEPS, Backoff, Doorbell, available,
                         can_wake, new_block)
 from ..model_step import set_model_states
@@ -47,6 +47,8 @@ class RemoteBackend:
         self.transport_s = 0.0  # s spent on the transport during start / advance
         self.models_s = 0.0  # s the models hosted in the worker took (host_models)
         self._evaluations, self._synced = 0, -1  # hosted models' steps so far, and at the last sync
+        # the block the hosted models' states come through at a sync, its layout and views
+        self._state_block, self._state_entries, self._state_views = None, None, None
         self._dt = 0.0
         env = dict(env if env is not None else os.environ)
         env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
@@ -167,10 +169,28 @@ class RemoteBackend:
 
     def sync_models(self, models) -> None:
         """The orchestrator's copies of the hosted models made equal to the worker's (nothing
-        to do if the models took no step since the last sync)."""
-        if self._synced != self._evaluations:
-            set_model_states(models, wire.loads(self._call("models_state")[1]))
-            self._synced = self._evaluations
+        to do if the models took no step since the last sync), through a shared block
+        (dem_region/state_block.py) made to the layout the worker announces."""
+        if self._synced == self._evaluations:
+            return
+        reply = self._call("models_state", self._state_entries)
+        if reply[0] == "layout":  # new models, or the first sync: a block to the worker's layout
+            entries = reply[1]
+            if self._state_block is not None:
+                self._state_views = None
+                self.blocks.remove(self._state_block)
+                self._state_block.close()
+                self._state_block.unlink()
+            self._state_block = new_block(state_block.offsets(entries)[1])
+            self.blocks.append(self._state_block)
+            self._call("models_state_block", self._state_block.name, entries)
+            self._state_entries, self._state_views = entries, state_block.views(self._state_block.buf, entries)
+            reply = self._call("models_state", self._state_entries)
+            if reply[0] != "ok":
+                raise RuntimeError(f"{self.name} worker: the models' states changed their layout twice in one sync")
+        rest = wire.loads(reply[1])
+        set_model_states(models, state_block.read(self._state_views, self._state_entries, rest))
+        self._synced = self._evaluations
 
     def set_models_state(self, states: list[dict]) -> None:
         """The hosted models set to ``states`` (model_states form: a checkpoint restored)."""
