@@ -16,3 +16,21 @@ def add_held_forces(added, F, V, rows, G, takes, half_dt, mass):
             if takes[r, k]:
                 F[p, k] += G[r, k]
                 V[p, k] += half_dt * G[r, k] / mass[r]
+
+
+@kernel
+def gather_forces(out, store, added, ids):
+    """out (k, 3) N <- store[ids] + added[ids]: the engine's force before any setforce and the
+    forces added this step, of particles ids (k,), without a temporary (each step's interface)."""
+    for r in range(ids.shape[0]):
+        p = ids[r]
+        for k in range(3):
+            out[r, k] = store[p, k] + added[p, k]
+
+
+@kernel
+def put_components(V, rows, comps, src, v):
+    """V[rows[e], comps[e]] = v[src[e], comps[e]] for each entry e: a velocity write of the
+    components a plan selected (rows (m,) engine rows, src (m,) rows of v (k, 3))."""
+    for e in range(rows.shape[0]):
+        V[rows[e], comps[e]] = v[src[e], comps[e]]

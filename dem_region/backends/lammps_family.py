@@ -32,7 +32,7 @@ import os
 
 import numpy as np
 
-from ..kernels import add_held_forces
+from ..kernels import add_held_forces, gather_forces, put_components
 
 
 class VerletArrays:
@@ -271,21 +271,20 @@ class VerletArrays:
             self._cmd("fix hold iface setforce 0 0 0")
 
     def set_velocities(self, ids: np.ndarray, v: np.ndarray) -> None:
-        v = np.asarray(v, float).reshape(-1, 3)
-        if not self._n_partial:
-            self.V[np.asarray(ids, int)] = v
-            return
-        # partial particles: the driven components only; the plan once per ids array (the
-        # interface's, each step) and prescription
+        """Velocities v (k, 3) m/s of particles ``ids``; of a partially prescribed particle
+        only its driven components. The plan (which components of which rows) once per ids
+        array (the interface's, each step) and prescription; the write compiled."""
+        v = np.ascontiguousarray(v, float).reshape(-1, 3)
         key = (ids, self._n_partial)
         if getattr(self, "_vel_key", None) is None or any(a is not b for a, b in zip(key, self._vel_key)):
             rows = np.asarray(ids, int)
             driven = self._driven[rows]
             written = driven | ~driven.any(axis=1, keepdims=True)
             at = np.nonzero(written)
-            self._vel_key, self._vel_plan = key, (rows[at[0]], at[1], written)
-        rows, comps, written = self._vel_plan
-        self.V[rows, comps] = v[written]
+            self._vel_key, self._vel_plan = key, (np.ascontiguousarray(rows[at[0]], np.int64),
+                                                  np.ascontiguousarray(at[1], np.int64),
+                                                  np.ascontiguousarray(at[0], np.int64))
+        put_components(self.V, *self._vel_plan, v)
 
     bulk_arrays = True  # positions read and forces written on the engine's arrays (ModelStep)
 
@@ -324,8 +323,14 @@ class VerletArrays:
 
     def forces(self, ids: np.ndarray) -> np.ndarray:
         """(k, 3) N: the engine's force before any setforce, plus what was added this step."""
-        ids = np.asarray(ids, int)
-        return self._store[ids] + self._added[ids]
+        ids = np.asarray(ids, np.int64)
+        out = np.empty((len(ids), 3))
+        gather_forces(out, self._store, self._added, ids)
+        return out
+
+    def forces_into(self, ids: np.ndarray, out: np.ndarray) -> None:
+        """``forces(ids)`` into out (k, 3) N (the interface's each step: nothing allocated)."""
+        gather_forces(out, self._store, self._added, ids)
 
     def positions_of(self, ids: np.ndarray) -> np.ndarray:
         return self.X[np.asarray(ids, int)].copy()

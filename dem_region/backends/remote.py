@@ -271,6 +271,16 @@ class RemoteBackend:
     def advance(self, between: Callable[[], None] | None = None) -> None:
         self._run("advance", between)
 
+    def forces_into(self, ids: np.ndarray, out: np.ndarray) -> None:
+        """``forces(ids)`` into out (k, 3) N; the interface's without a temporary."""
+        if ids is self.ids:
+            if self._added_here is None:
+                np.copyto(out, self.F)
+            else:
+                np.add(self.F, self._added_here, out=out)
+        else:
+            out[:] = self.forces(ids)
+
     def forces(self, ids: np.ndarray) -> np.ndarray:
         if ids is self.ids or (len(ids) == len(self.ids) and np.array_equal(ids, self.ids)):
             # written by the worker before its hook; the forces added during the hook (the
