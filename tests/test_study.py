@@ -199,10 +199,13 @@ def test_a_plate_study_runs_everywhere(femdem, mode, dem):
 def test_the_coupled_plate_equals_its_all_fem_plate(femdem):
     """The particle column under the sphere and the tie on its two inner faces add no compliance:
     coupled and all-FEM peak deflections within 3 % (the sphere at 1 m/s), each run's checks
-    passing."""
+    passing. On 16 x 10 elements, where the all-FEM peak is within 0.6 % of a 24 x 15 mesh (the
+    file's 8 x 5 reads 4.6 % stiff since hexahedra integrate their shear without spurious
+    twist modes, session 26)."""
     peaks = {}
+    mesh = ["--set", "mesh.elements_along=16", "--set", "mesh.elements_width=10"]
     for mode in ("fem", "coupled"):
-        code, s, err = femdem("run", str(PLATE), "--mode", mode)
+        code, s, err = femdem("run", str(PLATE), "--mode", mode, *mesh)
         assert code == 0, err
         assert_checks(s)
         peaks[mode] = s["qoi"]["peak_deflection"]
