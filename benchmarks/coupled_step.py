@@ -137,18 +137,21 @@ def yade_transfer(n: int = 1296, repeat: int = 200) -> dict:
     return out
 
 
+def _await(bell, which: int, k: int, wait) -> None:
+    """Wait (Backoff ``wait``) until the doorbell's counter ``which`` reaches k."""
+    while not bell.rung(which, k):
+        wait()
+    wait.reset()
+
+
 def _echo(name: str, rounds: int) -> None:
     """The worker's side of handshake(): each advance one engine step with one hook, no work."""
     from dem_region.doorbell import ADVANCE, DONE, GO, HOOK, Backoff, Doorbell
     bell, wait = Doorbell(name), Backoff()
     for k in range(1, rounds + 1):
-        while not bell.rung(ADVANCE, k):
-            wait()
-        wait.reset()
+        _await(bell, ADVANCE, k, wait)
         bell.ring(HOOK, k)
-        while not bell.rung(GO, k):
-            wait()
-        wait.reset()
+        _await(bell, GO, k, wait)
         bell.ring(DONE, k)
     bell.close()
 
@@ -172,13 +175,9 @@ def handshake(rounds: int = 20000, repeat: int = 5) -> list[float]:
                 if k == 101:  # past the child's start
                     t0 = time.perf_counter()
                 bell.ring(ADVANCE, k)
-                while not bell.rung(HOOK, k):
-                    wait()
-                wait.reset()
+                _await(bell, HOOK, k, wait)
                 bell.ring(GO, k)
-                while not bell.rung(DONE, k):
-                    wait()
-                wait.reset()
+                _await(bell, DONE, k, wait)
             out.append((time.perf_counter() - t0) / (rounds - 100) * 1e6)
             child.wait(timeout=30)
         finally:
