@@ -159,10 +159,7 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
         if not state["ask"]:  # the orchestrator has no hook: only the models run here
             return
         if state["F"] is not None:
-            if hasattr(backend, "forces_into"):
-                backend.forces_into(state["ids"], state["F"])
-            else:
-                state["F"][:] = backend.forces(state["ids"])
+            backend.forces_into(state["ids"], state["F"])
         if state["X_model"] is not None:  # the orchestrator's models read these positions
             backend.read_positions(state["model_ids"], state["X_model"])
         bell = state["bell"]

@@ -34,10 +34,8 @@ class KinematicTie:
         return np.inf
 
     def fast_force(self, x_nodes: np.ndarray) -> np.ndarray:
-        if hasattr(self.dem, "forces_into"):  # into this tie's buffer: nothing allocated per step
-            self.dem.forces_into(self.itf.ids, self._F)
-            return self.itf.to_nodes(self._F)
-        return self.itf.to_nodes(self.dem.forces(self.itf.ids))
+        self.dem.forces_into(self.itf.ids, self._F)  # into this tie's buffer: nothing allocated per step
+        return self.itf.to_nodes(self._F)
 
     def follow(self, v_nodes: np.ndarray) -> None:
         self.dem.set_velocities(self.itf.ids, self.itf.to_particles(v_nodes))

@@ -57,6 +57,10 @@ class DemBackend(Protocol):
     def forces(self, ids: np.ndarray) -> np.ndarray:
         """(k, 3) N: force the rest of the scene exerts on particles ``ids`` at this step."""
 
+    def forces_into(self, ids: np.ndarray, out: np.ndarray) -> None:
+        """``forces(ids)`` written into out (k, 3) N: the interface's each step, without a
+        temporary where the engine's arrays allow it."""
+
     def add_forces(self, ids: np.ndarray, F: np.ndarray) -> None:
         """Add forces F (k, 3) N to particles ``ids`` for the next move (penalty tie)."""
 

@@ -213,6 +213,9 @@ class YadeBackend:
         f = self.O.forces.f
         return _rows(map(f, np.asarray(ids, int).tolist()))
 
+    def forces_into(self, ids: np.ndarray, out: np.ndarray) -> None:
+        out[:] = self.forces(ids)  # YADE reads one body at a time: no bulk path to spare
+
     def add_forces(self, ids: np.ndarray, F: np.ndarray) -> None:
         """Forces (k, 3) N added to particles ``ids`` for the next move (call from the hook).
         YADE has no bulk write: one addF per particle, a list converted by boost (0.38 us per
