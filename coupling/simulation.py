@@ -31,22 +31,32 @@ class Stage:
     """One named phase of a clock step; ``timer``: its summary.json timing bucket;
     ``substages``: the stages its participant runs inside it, in order (an engine's hook runs
     them between its force evaluation and its move); ``seconds``: wall time so far (its
-    substages' included)."""
+    substages' included); ``repeat(n)``: n clock steps of this stage in one call, where the
+    stage is the whole clock step (an engine in a worker then crosses the process boundary
+    once per call, not once per step)."""
 
     name: str
     timer: str
     run: Callable[[], None]
     substages: list["Stage"] = field(default_factory=list)
     seconds: float = 0.0
+    repeat: Callable[[int], None] | None = None
 
 
-def run_stages(stages: list[Stage]) -> None:
-    """Run ``stages`` in order, each timed."""
+def run_stages(stages: list[Stage], steps: int = 1) -> None:
+    """Run ``stages`` in order, each timed, ``steps`` clock steps over (a lone stage that can
+    repeat itself in one call)."""
     clock = time.perf_counter
-    for stage in stages:
+    if steps > 1 and len(stages) == 1 and stages[0].repeat is not None:
         t0 = clock()
-        stage.run()
-        stage.seconds += clock() - t0
+        stages[0].repeat(steps)
+        stages[0].seconds += clock() - t0
+        return
+    for _ in range(steps):
+        for stage in stages:
+            t0 = clock()
+            stage.run()
+            stage.seconds += clock() - t0
 
 
 def stage_timing(stages: list[Stage], within: str = "") -> list[dict]:
@@ -223,8 +233,13 @@ def run_clock(sim: Simulation, on_sample: Callable[[int, float], None] | None = 
             sample(0)
         if frame_every and on_frame and resume_from is None:  # a resume keeps the frames before its checkpoint
             frame(step)
-        for step in range(first, sim.n_steps + 1):
-            run_stages(sim.stages)
+        while step < sim.n_steps:
+            # the steps up to the next thing the loop does in one go (a sample, a frame, a checkpoint)
+            nxt = min(sim.n_steps, _next_multiple(step, sim.history_every),
+                      _next_multiple(step, frame_every) if frame_every and on_frame else sim.n_steps,
+                      _next_multiple(step, checkpoint_every) if can_save else sim.n_steps)
+            run_stages(sim.stages, nxt - step)
+            step = nxt
             if step % sim.history_every == 0 or step == sim.n_steps:
                 sample(step)
                 if sim.growth is not None and step < sim.n_steps:
@@ -245,6 +260,11 @@ def run_clock(sim: Simulation, on_sample: Callable[[int, float], None] | None = 
         raise
     sync()
     return _result(hist, _corrected(timing, sim), sim.energies(), sim.n_steps, taken, sim, retired)
+
+
+def _next_multiple(step: int, every: int) -> int:
+    """The first multiple of ``every`` after ``step``."""
+    return (step // every + 1) * every
 
 
 def _corrected(timing: dict, sim: Simulation) -> dict:

@@ -1,8 +1,9 @@
 """The per-step handshake between the orchestrator and an engine's worker, in shared memory.
 
-Each clock step the orchestrator starts the engine's advance and waits for its end ("advance",
-then "done"); each engine step the worker hands the interface forces over and waits for the
-velocities back ("hook", then "go"). As pickled socket messages these cost about 0.1 ms each
+The orchestrator starts the engine's advance over the steps up to its next history sample and
+waits for its end ("advance", then "done"); each engine step the worker hands the interface
+forces over and waits for the velocities back ("hook", then "go"). A hook that fails in the
+orchestrator raises ABORT with its go: the worker takes no further step of that advance. As pickled socket messages these cost about 0.1 ms each
 (a wake-up through the kernel each), more than a LAMMPS step of a few thousand particles.
 Here each side owns its counters in a shared block and only ever raises them: the worker
 rings ``hook`` k, the orchestrator answers ``go`` k, and the same for advance / done (one
@@ -35,16 +36,24 @@ import numpy as np
 
 # counters: the worker raises HOOK and DONE, the orchestrator GO and ADVANCE
 HOOK, GO, ADVANCE, DONE = range(4)
-# values beside them: an advance's steps, whether the orchestrator has a hook, the models' dt
-# (the orchestrator's); the engine's and the hosted models' seconds of that advance (the worker's)
-STEPS, ASK, DT, ENGINE_S, MODELS_S = range(5)
+# values beside them, the orchestrator's: an advance's steps, whether the orchestrator has a
+# hook, the models' dt, whether its hook failed (the worker then takes no further step of that
+# advance), whether the hosted models' states go into their block after the last step's
+# models (the sample that ends the advance reads them there: no round trip); the worker's: the
+# engine's and the hosted models' seconds of that advance, and the advance whose states it wrote
+STEPS, ASK, DT, ABORT, SYNC, ENGINE_S, MODELS_S, WRITTEN = range(8)
+VALUES = 8
 
 
-# with wake-ups, a waiter yields this long (s) before it sleeps: a wake-up through this VM's kernel
-# costs more than a short wait (measured on the LAMMPS coarse beam: wall x 0.91 alone, x 0.88
-# beside a busy process, CPU x 0.85, medians of 5 pairs against never sleeping); the
-# environment's FEMDEM_PATIENCE overrides it for such measurements (docs/benchmarks.md)
+# with wake-ups, a waiter yields at least this long (s) before it sleeps: a wake-up through this
+# VM's kernel costs more than a short wait (measured on the LAMMPS coarse beam: wall x 0.91
+# alone, x 0.88 beside a busy process, CPU x 0.85, medians of 5 pairs against never sleeping);
+# a waiter that adapts yields twice its typical wait, at most PATIENCE_MAX: a wait a little
+# longer than the floor (the engine's step and the hosted laws: 0.3 ms in the main job) then
+# ends awake instead of costing a wake-up each step (docs/benchmarks.md, session 27). The
+# environment's FEMDEM_PATIENCE and FEMDEM_PATIENCE_MAX override both for such measurements.
 PATIENCE = float(os.environ.get("FEMDEM_PATIENCE", "3e-4"))
+PATIENCE_MAX = max(PATIENCE, float(os.environ.get("FEMDEM_PATIENCE_MAX", "2e-3")))
 
 
 class Backoff:
@@ -53,21 +62,31 @@ class Backoff:
     ``longest`` s at a time, which a message ends at once. ``poll(timeout)`` (a Connection's)
     costs about 20 us (it builds a selector), so before that it is asked every 32nd round.
     With a ``bell`` that has wake-ups: after ``patience`` s of that, sleep until rung (or a
-    message comes)."""
+    message comes). ``adapt``: the patience follows the waits this Backoff saw end (``reset``
+    after each): twice their running mean (1/16 weight to the newest), between ``patience``
+    and PATIENCE_MAX."""
 
     def __init__(self, spin: int = 64, yield_rounds: int = 5000, longest: float = 2e-4, bell: "Doorbell | None" = None,
-                 patience: float | None = None):
+                 patience: float | None = None, adapt: bool = False):
         self.spin, self.yield_rounds, self.longest = spin, yield_rounds, longest
         self.bell = bell if bell is not None and bell.can_sleep else None
-        self.patience = PATIENCE if patience is None else patience
-        self.rounds, self._since, self._drained = 0, None, False
+        self.floor = self.patience = PATIENCE if patience is None else patience
+        self.adapt, self.typical = adapt, 0.0
+        self.rounds, self._since, self._drained, self._t0 = 0, None, False, 0.0
 
     def reset(self) -> None:
+        """A wait ended (the next call starts another)."""
+        if self.adapt and self.rounds:
+            waited = min(time.perf_counter() - self._t0, PATIENCE_MAX)
+            self.typical += (waited - self.typical) / 16
+            self.patience = min(PATIENCE_MAX, max(self.floor, 2.0 * self.typical))
         self.rounds, self._since, self._drained = 0, None, False
 
     def __call__(self, poll=None) -> bool:
         """One round; True when ``poll`` says a socket message is waiting."""
         self.rounds += 1
+        if self.adapt and self.rounds == 1:
+            self._t0 = time.perf_counter()
         if self.bell is not None and self.rounds > self.spin:
             now = time.perf_counter()
             if self._since is None:
@@ -108,19 +127,19 @@ def available() -> bool:
 
 
 class Doorbell:
-    """Four int64 counters (HOOK, GO, ADVANCE, DONE) and five float64 values (STEPS ...
-    MODELS_S) in shared memory. Without ``name`` the orchestrator makes the block (and unlinks
+    """Four int64 counters (HOOK, GO, ADVANCE, DONE) and eight float64 values (STEPS ...
+    WRITTEN) in shared memory. Without ``name`` the orchestrator makes the block (and unlinks
     it in close); with it the worker attaches."""
 
     def __init__(self, name: str | None = None):
         self.owner = name is None
         self.can_sleep = False  # wake-ups (eventfds) made (owner) or received (worker)
         self._ring_fd = self._wake_fd = -1
-        self.shm = new_block(8 * 9) if self.owner else shared_memory.SharedMemory(name=name)
+        self.shm = new_block(8 * (4 + VALUES)) if self.owner else shared_memory.SharedMemory(name=name)
         if not self.owner:  # Python < 3.13 registers attached blocks too and would unlink it at exit
             resource_tracker.unregister(self.shm._name, "shared_memory")  # noqa: SLF001
         self.count = np.ndarray((4,), dtype=np.int64, buffer=self.shm.buf)
-        self.value = np.ndarray((5,), dtype=np.float64, buffer=self.shm.buf, offset=32)
+        self.value = np.ndarray((VALUES,), dtype=np.float64, buffer=self.shm.buf, offset=32)
         if self.owner:
             self.count[:] = 0
             self.value[:] = 0.0

@@ -22,7 +22,8 @@ from multiprocessing.connection import Connection
 import numpy as np
 
 from dem_region import state_block, wire
-from dem_region.doorbell import ADVANCE, ASK, DONE, DT, ENGINE_S, GO, HOOK, MODELS_S, STEPS, Backoff, Doorbell
+from dem_region.doorbell import (ABORT, ADVANCE, ASK, DONE, DT, ENGINE_S, GO, HOOK, MODELS_S, STEPS, SYNC, WRITTEN,
+                                 Backoff, Doorbell)
 
 
 def _attach_block(name: str) -> shared_memory.SharedMemory:
@@ -140,7 +141,9 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
     state = {"ids": np.zeros(0, int), "F": None, "V": None, "blocks": [], "in_hook": 0.0,
              "model_ids": None, "X_model": None, "F_model": None,
              "models": [], "view": None, "models_dt": 0.0, "in_models": 0.0, "ask": False,
-             "bell": None, "hooks": 0, "advances": 0, "state_shm": None, "state_views": None}
+             "bell": None, "hooks": 0, "advances": 0, "state_shm": None, "state_views": None, "state_entries": None,
+             "abort": False, "write_states": False,
+             "go_wait": None, "advance_wait": None}
 
     def between():
         """The engine's coupling hook: the hosted models' step, interface forces out, then serve
@@ -156,6 +159,8 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
             t0 = time.perf_counter()
             state["view"].run(state["models"], state["models_dt"])
             state["in_models"] += time.perf_counter() - t0
+            if state["write_states"]:  # the advance's last step: the sample after it reads these
+                write_states()
         if not state["ask"]:  # the orchestrator has no hook: only the models run here
             return
         if state["F"] is not None:
@@ -173,11 +178,15 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
         else:  # ring, then wait for the go, serving the queries the hook makes meanwhile
             state["hooks"] += 1
             bell.ring(HOOK, state["hooks"])
-            wait = Backoff(bell=bell)
+            wait = state["go_wait"]
+            wait.reset()
             while not bell.rung(GO, state["hooks"]):
                 if wait(conn.poll):
                     handle(conn.recv())
                     wait.reset()
+            if bell.value[ABORT]:  # the orchestrator's hook failed: no further step of this advance
+                state["abort"] = True
+                return
             conn.forward(("go",))
         if state["F_model"] is not None:  # ... and wrote their forces here
             backend.add_forces(state["model_ids"], state["F_model"])
@@ -186,16 +195,31 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
             V = conn.share(state["V"])  # (other ranks: None here, rank 0's values returned)
             backend.set_velocities(state["ids"], V)
 
-    def run(op: str, steps: int, ask: bool, dt: float) -> tuple[float, float]:
+    def write_states():
+        """The hosted models' states into their block, when they fit its layout and are all
+        numeric (else the orchestrator's sync asks for them over the socket)."""
+        states = model_states(state["models"])
+        entries, rest = state_block.layout(states)
+        if state["state_views"] is not None and entries == state["state_entries"] and not any(rest):
+            state_block.write(state["state_views"], entries, states)
+            state["bell"].value[WRITTEN] = state["advances"]
+
+    def run(op: str, steps: int, ask: bool, dt: float, sync: bool = False) -> tuple[float, float]:
         """Start the engine, or advance it ``steps`` steps; (the engine's own seconds, the
-        hosted models'): the orchestrator separates both from the transport."""
+        hosted models'): the orchestrator separates both from the transport. ``sync``: the
+        models' states into their block after the last step's models (write_states)."""
         state["ask"] = bool(ask)  # the orchestrator has a hook to run
         hook = between if ask or state["models"] else None
-        t0, state["in_hook"], state["in_models"] = time.perf_counter(), 0.0, 0.0
+        t0, state["in_hook"], state["in_models"], state["abort"] = time.perf_counter(), 0.0, 0.0, False
         # the models' step: none behind the first hook (at start), the engine's after it
         state["models_dt"] = dt if op == "advance" else 0.0
-        for _ in range(steps if op == "advance" else 1):
+        n = steps if op == "advance" else 1
+        for i in range(n):
+            state["write_states"] = sync and i == n - 1 and bool(state["models"])
             getattr(backend, op)(hook)
+            if state["abort"]:
+                break
+        state["write_states"] = False
         return time.perf_counter() - t0 - state["in_hook"], state["in_models"]
 
     def handle(msg) -> bool:
@@ -239,7 +263,7 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
                     state["state_shm"].close()
                 shm = state["state_shm"] = _attach_block(args[0])
                 state["blocks"].append(shm)
-                state["state_views"] = state_block.views(shm.buf, args[1])
+                state["state_views"], state["state_entries"] = state_block.views(shm.buf, args[1]), args[1]
                 conn.send(("ok",))
             elif op == "set_models_state":
                 set_model_states(state["models"], wire.loads(args[0]))
@@ -250,9 +274,11 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
                 conn.send(("ok",))
             elif op == "doorbell":  # the per-step handshake in shared memory from now on (rank 0)
                 if conn.root:
-                    state["bell"] = Doorbell(args[0])
+                    bell = state["bell"] = Doorbell(args[0])
                     if args[1]:  # the wake-ups follow the message on the socket
-                        state["bell"].receive_wakeups(conn.fileno())
+                        bell.receive_wakeups(conn.fileno())
+                    # each kind of wait learns its own patience (the orchestrator's hook; its sample)
+                    state["go_wait"], state["advance_wait"] = Backoff(bell=bell, adapt=True), Backoff(bell=bell, adapt=True)
                 conn.send(("ok",))
             elif op == "set_dt":
                 backend.set_dt(args[0])
@@ -284,13 +310,15 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
 
     def serve_one() -> bool:
         """The next advance rung on the doorbell (one rank) or message; False to stop."""
-        bell, wait = state["bell"], Backoff(bell=state["bell"])
+        bell, wait = state["bell"], state["advance_wait"]
+        if wait is not None:
+            wait.reset()
         while bell is not None and conn.comm is None:
             if bell.rung(ADVANCE, state["advances"] + 1):
                 state["advances"] += 1
                 v = bell.value
                 try:
-                    engine_s, models_s = run("advance", int(v[STEPS]), bool(v[ASK]), float(v[DT]))
+                    engine_s, models_s = run("advance", int(v[STEPS]), bool(v[ASK]), float(v[DT]), bool(v[SYNC]))
                 except (EOFError, ConnectionError):
                     raise
                 except Exception as exc:  # reported on the socket, as a message's failure

@@ -123,17 +123,32 @@ def test_with_wake_ups_a_long_wait_sleeps_until_rung_or_a_message_comes():
         theirs.close()
 
 
-def test_an_advance_that_fails_in_the_worker_is_reported_where_it_failed_and_the_next_one_runs(monkeypatch):
-    """The worker's serve() against the orchestrator's RemoteBackend._run over a socket pair and
-    the doorbell, with a made-up engine whose second step raises: the orchestrator raises the
-    engine's message naming the line that failed, and the counters stay in step (the third
-    advance runs)."""
+def _remote_in_a_thread(engine, monkeypatch):
+    """(RemoteBackend, thread): the orchestrator's side over a socket pair against the
+    worker's serve() in a thread of this process, running the made-up ``engine`` class."""
     import socket
     import threading
     from multiprocessing.connection import Connection
 
     from dem_region import backends, worker
     from dem_region.backends.remote import RemoteBackend
+    monkeypatch.setattr(backends, "get_backend", lambda name: engine)
+    ours, theirs = socket.socketpair()
+    serving = threading.Thread(target=worker.serve, args=(Connection(theirs.detach()), "made-up"), daemon=True)
+    serving.start()
+    remote = object.__new__(RemoteBackend)  # its state without a child process
+    remote.name, remote.ranks, remote.conn, remote.bell, remote.proc = "made-up", 1, Connection(ours.detach()), None, None
+    remote._hooks = remote._advances = remote._evaluations = remote._steps_left = 0
+    remote._dt, remote._models_pending, remote.models_s, remote.transport_s = 1e-6, False, 0.0, 0.0
+    remote._state_views, remote._prewrite, remote._wait = None, -1, None
+    return remote, serving
+
+
+def test_an_advance_that_fails_in_the_worker_is_reported_where_it_failed_and_the_next_one_runs(monkeypatch):
+    """The worker's serve() against the orchestrator's RemoteBackend._run over a socket pair and
+    the doorbell, with a made-up engine whose second step raises: the orchestrator raises the
+    engine's message naming the line that failed, and the counters stay in step (the third
+    advance runs)."""
 
     class Engine:
         steps = 0
@@ -149,14 +164,7 @@ def test_an_advance_that_fails_in_the_worker_is_reported_where_it_failed_and_the
         def finalize(self):
             pass
 
-    monkeypatch.setattr(backends, "get_backend", lambda name: Engine)
-    ours, theirs = socket.socketpair()
-    serving = threading.Thread(target=worker.serve, args=(Connection(theirs.detach()), "made-up"), daemon=True)
-    serving.start()
-    remote = object.__new__(RemoteBackend)  # its state without a child process
-    remote.name, remote.ranks, remote.conn, remote.bell, remote.proc = "made-up", 1, Connection(ours.detach()), None, None
-    remote._hooks = remote._advances = remote._evaluations = 0
-    remote._dt, remote._models_pending, remote.models_s, remote.transport_s = 1e-6, False, 0.0, 0.0
+    remote, serving = _remote_in_a_thread(Engine, monkeypatch)
     try:
         remote.start(None)
         remote.advance(None)
@@ -164,6 +172,57 @@ def test_an_advance_that_fails_in_the_worker_is_reported_where_it_failed_and_the
             remote.advance(None)
         remote.advance(None)
         assert Engine.steps == 3 and remote._advances == 3
+        remote._call("finalize")
+        serving.join(timeout=10)
+        assert not serving.is_alive()
+    finally:
+        remote.conn.close()
+        if remote.bell is not None:
+            remote.bell.close()
+
+
+def test_an_advance_of_many_steps_hooks_each_step_and_stops_where_the_orchestrators_hook_fails(monkeypatch):
+    """One advance of several steps (run_clock's block up to the next sample) crosses once each
+    way and runs the orchestrator's hook after every step; when that hook raises at step k,
+    the worker takes no step after k, the exception reaches the caller, and the next advance
+    runs from there with the counters in step."""
+    from dem_region.doorbell import available
+    if not available():
+        pytest.skip("the doorbell needs x86's store order")
+
+    class Engine:
+        steps = 0
+
+        def start(self, hook):
+            if hook:
+                hook()
+
+        def advance(self, hook):
+            Engine.steps += 1
+            if hook:
+                hook()
+
+        def finalize(self):
+            pass
+
+    remote, serving = _remote_in_a_thread(Engine, monkeypatch)
+    seen = []
+
+    def hook():
+        seen.append(Engine.steps)
+        if Engine.steps == 7:
+            raise ArithmeticError("the far field diverged")
+
+    try:
+        remote.start(hook)
+        remote.advance(hook, 5)
+        assert seen == [0, 1, 2, 3, 4, 5] and remote._advances == 1
+        with pytest.raises(ArithmeticError, match="diverged"):
+            remote.advance(hook, 5)
+        assert Engine.steps == 7 and seen[-1] == 7
+        seen.clear()
+        remote.advance(hook, 3)  # the next advance starts where the failed one stopped
+        assert seen == [8, 9, 10] and Engine.steps == 10 and remote._advances == 3
         remote._call("finalize")
         serving.join(timeout=10)
         assert not serving.is_alive()

@@ -202,14 +202,14 @@ class CoupledClock:
             self.dem.set_models_state(d.get("models", []))
         self.dem.restore(engine_checkpoint)
 
-    def step(self) -> None:
-        """One FEM step = m DEM steps."""
-        for _ in range(self.m):
-            self.dem.advance(self._between)
+    def step(self, n: int = 1) -> None:
+        """n FEM steps = n m DEM steps, in one advance of the engine (the whole coupled step
+        runs in its hook)."""
+        self.dem.advance(self._between, n * self.m)
 
     def stages(self) -> list[Stage]:
         """One FEM step: m engine steps, each running ``hook_stages`` inside its hook."""
-        return [Stage(f"engine.step x {self.m}", "dem", self.step, substages=self.hook_stages)]
+        return [Stage(f"engine.step x {self.m}", "dem", self.step, substages=self.hook_stages, repeat=self.step)]
 
     def energies(self) -> dict[str, float]:
         """Ledger of the coupled system at the last snapshot (the tie's work is internal)."""

@@ -99,7 +99,8 @@ def dem_only(p: dict, scene: DemScene, dem: str, t_end_default: float,
                           {"displacement": backend.positions() - scene.x, "radius": scene.radius})
 
     sim = Simulation(
-        stages=[Stage("engine.step", "dem", lambda: backend.advance(hook), substages=substages)], dt=dt, n_steps=n,
+        stages=[Stage("engine.step", "dem", lambda: backend.advance(hook), substages=substages,
+                      repeat=lambda steps: backend.advance(hook, steps))], dt=dt, n_steps=n,
         history_every=history_every or p["output.history_every"] or max(1, n // 1000), probes={}, energies=energies,
         counts={"fem_nodes": 0, "fem_elements": 0, "particles": scene.n, "bonds": len(scene.bonds),
                 "interface_particles": 0, "law_bonds": sum(len(m.pairs) for m in models if hasattr(m, "pairs"))},

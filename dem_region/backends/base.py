@@ -1,7 +1,7 @@
 """The back-end contract: one small class shaped like a coupling participant (preCICE style).
 
 Order of calls: ``build(scene)`` once; ``set_dt``; ``start(between)`` once (forces at x_0,
-then ``between()``); then per step ``advance(between)``, which (1) moves every particle with
+then ``between()``); then ``advance(between, steps)``, which for each of its steps (1) moves every particle with
 the forces of the current positions (leapfrog: v_{k+1/2} = v_{k-1/2} + dt F_k / m,
 x_{k+1} = x_k + dt v_{k+1/2}; prescribed particles keep the velocity last written),
 (2) computes the forces at x_{k+1}, (3) calls ``between()``, where the orchestrator reads
@@ -47,7 +47,10 @@ class DemBackend(Protocol):
 
     def start(self, between: Callable[[], None] | None = None) -> None: ...
 
-    def advance(self, between: Callable[[], None] | None = None) -> None: ...
+    def advance(self, between: Callable[[], None] | None = None, steps: int = 1) -> None:
+        """``steps`` engine steps, ``between()`` after each step's forces. An engine in a worker
+        crosses the process boundary once per call, not once per step; if ``between`` raises,
+        the steps after it are not taken and the exception propagates."""
 
     def prescribe(self, ids: np.ndarray) -> None:
         """Slave particles ``ids`` (their motion comes from set_velocities only)."""

@@ -206,7 +206,11 @@ class LammpsBackend(VerletArrays):
         self._setup_needed = False
         self._hook_phase(between)
 
-    def advance(self, between: Callable[[], None] | None = None) -> None:
+    def advance(self, between: Callable[[], None] | None = None, steps: int = 1) -> None:
+        for _ in range(steps):
+            self._advance_one(between)
+
+    def _advance_one(self, between: Callable[[], None] | None) -> None:
         x_old = self._step_begin()
         self._to_engine()  # several ranks: what the hook and the added forces wrote
         if self._setup_needed:  # fixes added since the last run need a setup

@@ -158,7 +158,11 @@ class LiggghtsBackend(VerletArrays):
         self._refresh_store()
         self._hook_phase(between)
 
-    def advance(self, between: Callable[[], None] | None = None) -> None:
+    def advance(self, between: Callable[[], None] | None = None, steps: int = 1) -> None:
+        for _ in range(steps):
+            self._advance_one(between)
+
+    def _advance_one(self, between: Callable[[], None] | None) -> None:
         x_old = self._step_begin()
         if getattr(self, "_setup_needed", False):  # fixes added since the last run need a setup
             self.lib.lammps_command(self.h, b"run 1 pre yes post no")

@@ -23,8 +23,8 @@ from typing import Callable
 import numpy as np
 
 from .. import state_block, wire
-from ..doorbell import (ADVANCE, ASK, DONE, DT, ENGINE_S, GO, HOOK, MODELS_S, STEPS, Backoff, Doorbell, available,
-                        can_wake, new_block)
+from ..doorbell import (ABORT, ADVANCE, ASK, DONE, DT, ENGINE_S, GO, HOOK, MODELS_S, STEPS, SYNC, WRITTEN, Backoff,
+                        Doorbell, available, can_wake, new_block)
 from ..model_step import set_model_states
 from ..scene import DemScene
 from .base import EngineUnavailable
@@ -49,6 +49,9 @@ class RemoteBackend:
         self._evaluations, self._synced = 0, -1  # hosted models' steps so far, and at the last sync
         # the block the hosted models' states come through at a sync, its layout and views
         self._state_block, self._state_entries, self._state_views = None, None, None
+        # the advance after whose last step's models the worker writes their states into that
+        # block (SYNC), and the steps of the current advance not yet hooked
+        self._prewrite, self._steps_left = -1, 0
         self._dt = 0.0
         env = dict(env if env is not None else os.environ)
         env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
@@ -62,6 +65,7 @@ class RemoteBackend:
             parent = self._launch_ranks(python, engine, env)
         self.conn = Connection(parent.detach())
         self.bell: Doorbell | None = None  # the per-step handshake, made at the first start
+        self._wait: Backoff | None = None  # the waits for the worker's hooks and its done
         self._hooks = self._advances = 0  # hooks the worker rang, advances rung to it, so far
         self.blocks: list[shared_memory.SharedMemory] = []
         self.ids = np.zeros(0, int)
@@ -173,6 +177,12 @@ class RemoteBackend:
         (dem_region/state_block.py) made to the layout the worker announces."""
         if self._synced == self._evaluations:
             return
+        if (self.bell is not None and self._steps_left == 0 and self._prewrite == self._advances
+                and self.bell.value[WRITTEN] == self._advances):  # written after the advance's last step
+            set_model_states(models, state_block.read(self._state_views, self._state_entries,
+                                                      [{} for _ in models]))
+            self._synced = self._evaluations
+            return
         reply = self._call("models_state", self._state_entries)
         if reply[0] == "layout":  # new models, or the first sync: a block to the worker's layout
             entries = reply[1]
@@ -196,6 +206,7 @@ class RemoteBackend:
         """The hosted models set to ``states`` (model_states form: a checkpoint restored)."""
         self._call("set_models_state", wire.dumps(states))
         self._evaluations += 1  # the copies here may differ from the worker's now
+        self._prewrite = -1  # and the states in the block are older than the worker's
 
     def prescribe(self, ids: np.ndarray, dofs: str = "xyz") -> None:
         if dofs != "xyz":  # a partial prescription (symmetry plane): no interface arrays
@@ -212,22 +223,35 @@ class RemoteBackend:
         if self.bell is None and available():
             self.bell, wake = Doorbell(), can_wake()
             self._call("doorbell", self.bell.name, wake, then=self.bell.send_wakeups if wake else None)
-        bell, wait = self.bell, Backoff(bell=self.bell)
+            self._wait = Backoff(bell=self.bell, adapt=True)  # one for the run: it learns the engine's step
+        bell, wait = self.bell, self._wait
+        if wait is not None:
+            wait.reset()
         t0, in_hook = clock(), 0.0
         rung = bell is not None and op == "advance" and self.ranks == 1  # (ranks: rank 0 forwards it)
         if rung:
             self._advances += 1
-            bell.ring(ADVANCE, self._advances, {STEPS: n, ASK: float(between is not None), DT: self._dt})
+            self._steps_left = n if op == "advance" else 0
+            prewrite = self._state_views is not None  # the block is made at the first sync
+            self._prewrite = self._advances if prewrite else -1
+            bell.ring(ADVANCE, self._advances, {STEPS: n, ASK: float(between is not None), DT: self._dt, ABORT: 0.0,
+                                                SYNC: float(prewrite)})
         else:
             self._send((op, n, between is not None, self._dt))
         while True:
             if bell is not None:
                 if bell.rung(HOOK, self._hooks + 1):
                     self._hooks += 1
+                    failed = True
                     try:
                         in_hook += self._hook(between)
-                    finally:  # the worker finishes its step even when the hook failed here
+                        failed = False
+                    finally:  # the worker finishes its step even when the hook failed here ...
+                        if failed and rung:
+                            bell.value[ABORT] = 1.0  # ... and takes no further one
                         bell.ring(GO, self._hooks)
+                        if failed and rung:
+                            self._await_done()
                     wait.reset()
                     continue
                 if rung and bell.rung(DONE, self._advances):
@@ -245,6 +269,20 @@ class RemoteBackend:
             else:
                 self._raise(msg)
 
+    def _await_done(self, timeout: float = 30.0) -> None:
+        """After a failed hook: wait until the worker ends the advance (DONE, or its error on the
+        socket), so that the next call finds it serving; a worker that died or hangs is left to
+        ``finalize``."""
+        wait, t0 = Backoff(bell=self.bell), time.monotonic()
+        while not self.bell.rung(DONE, self._advances) and time.monotonic() - t0 < timeout:
+            if self.proc is not None and self.proc.poll() is not None:
+                return
+            if wait(self.conn.poll):
+                try:
+                    self.conn.recv()
+                except (EOFError, OSError):
+                    return
+
     def _done(self, between, n: int, waited: float, engine_s: float, models_s: float) -> None:
         """Book an advance's end: ``waited`` s outside the hooks, of which the worker spent
         ``engine_s`` in the engine and ``models_s`` in the hosted models; the rest is transport
@@ -252,6 +290,7 @@ class RemoteBackend:
         engine does not pay)."""
         if between is None:  # the worker's hosted models stepped without telling
             self._evaluations += n
+            self._steps_left = 0
         self.models_s += float(models_s)
         self.transport_s += max(0.0, waited - float(engine_s) - float(models_s))
 
@@ -259,6 +298,7 @@ class RemoteBackend:
         """The orchestrator's side of one engine step's hook; its wall time (s)."""
         t1 = time.perf_counter()
         self._evaluations += 1
+        self._steps_left -= 1
         self._added_here = None  # the worker's F was taken before this hook's additions
         self._models_pending = False
         if between is not None:
@@ -268,8 +308,14 @@ class RemoteBackend:
     def start(self, between: Callable[[], None] | None = None) -> None:
         self._run("start", between)
 
-    def advance(self, between: Callable[[], None] | None = None) -> None:
-        self._run("advance", between)
+    def advance(self, between: Callable[[], None] | None = None, steps: int = 1) -> None:
+        """``steps`` engine steps in one advance (one hand-over each way, the hooks between);
+        on several ranks, or without the doorbell, one advance per step."""
+        if self.ranks == 1 and (self.bell is not None or available()):
+            self._run("advance", between, steps)
+            return
+        for _ in range(steps):
+            self._run("advance", between)
 
     def forces_into(self, ids: np.ndarray, out: np.ndarray) -> None:
         """``forces(ids)`` into out (k, 3) N; the interface's without a temporary."""

@@ -154,9 +154,10 @@ class YadeBackend:
         self.advance(between)
         self.O.dt = dt
 
-    def advance(self, between: Callable[[], None] | None = None) -> None:
+    def advance(self, between: Callable[[], None] | None = None, steps: int = 1) -> None:
         self._between = between
-        self.O.step()
+        for _ in range(steps):
+            self.O.step()
 
     # -- interface data ----------------------------------------------------------------------
     def prescribe(self, ids: np.ndarray, dofs: str = "xyz") -> None:
