@@ -139,6 +139,7 @@ class Doorbell:
         if not self.owner:  # Python < 3.13 registers attached blocks too and would unlink it at exit
             resource_tracker.unregister(self.shm._name, "shared_memory")  # noqa: SLF001
         self.count = np.ndarray((4,), dtype=np.int64, buffer=self.shm.buf)
+        self._counts = self.shm.buf[:32].cast("q")  # the same counters: a waiter reads one each round
         self.value = np.ndarray((VALUES,), dtype=np.float64, buffer=self.shm.buf, offset=32)
         if self.owner:
             self.count[:] = 0
@@ -147,14 +148,15 @@ class Doorbell:
 
     def ring(self, which: int, k: int, values: dict[int, float] | None = None) -> None:
         """Counter ``which`` to k, after the values ({slot: value}) it hands over."""
-        for slot, v in (values or {}).items():
-            self.value[slot] = v
+        if values:
+            for slot, v in values.items():
+                self.value[slot] = v
         self.count[which] = k
         if self.can_sleep:  # after the counter: the woken side finds it raised
             os.eventfd_write(self._ring_fd, 1)
 
     def rung(self, which: int, k: int) -> bool:
-        return int(self.count[which]) >= k
+        return self._counts[which] >= k
 
     # -- wake-ups ------------------------------------------------------------------------------
     def send_wakeups(self, sock_fd: int) -> None:
@@ -200,6 +202,7 @@ class Doorbell:
             os.close(self._ring_fd)
             self.can_sleep = False
         self.count = self.value = None
+        self._counts.release()
         self.shm.close()
         if self.owner:
             self.shm.unlink()

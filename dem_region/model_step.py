@@ -74,7 +74,9 @@ def model_states(models) -> list[dict]:
 
 def set_model_states(models, states: list[dict]) -> None:
     """Models made equal to ``states`` (from model_states): a checkpoint restored, or the
-    orchestrator's copies of models that run in an engine's worker brought up to date."""
+    orchestrator's copies of models that run in an engine's worker brought up to date. The
+    arrays may be views on a shared block the next sync rewrites: each model's restore_state
+    copies what it keeps (tests/test_wire.py holds every hosted model to that)."""
     for m, d in zip(models, states):
         d = dict(d)
         force = d.pop("mirror_force", None)

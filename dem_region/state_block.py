@@ -64,11 +64,40 @@ def write(on: list[np.ndarray], entries: list[tuple], states: list[dict]) -> Non
         view[...] = states[i][key]
 
 
-def read(on: list[np.ndarray], entries: list[tuple], rest: list[dict]) -> list[dict]:
-    """The states written by ``write``: copies of the arrays (the block is rewritten at the
-    next sync), scalars of their kind, and the rest."""
+def write_if_fits(on: list[np.ndarray], entries: list[tuple], states: list[dict]) -> bool:
+    """``write`` when ``states`` have exactly the block's layout (each entry's key, kind, dtype
+    and shape, nothing beside them); else False and nothing written. One pass, no layout built:
+    the worker's side of a sync at the end of each advance."""
+    count = [0] * len(states)
+    for view, (i, key, dtype, shape, kind) in zip(on, entries):
+        v = states[i].get(key) if i < len(states) else None
+        if kind == "array":
+            if not (isinstance(v, np.ndarray) and v.shape == view.shape and v.dtype == view.dtype):
+                return False
+        elif kind == "bool":
+            if not isinstance(v, (bool, np.bool_)):
+                return False
+        elif kind == "int":
+            if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, np.integer)):
+                return False
+        elif isinstance(v, (bool, np.bool_, int, np.integer)) or not isinstance(v, (float, np.floating)):
+            return False
+        count[i] += 1
+    if any(c != len(d) for c, d in zip(count, states)):  # a key beside the layout (rest)
+        return False
+    write(on, entries, states)
+    return True
+
+
+def read(on: list[np.ndarray], entries: list[tuple], rest: list[dict], copy: bool = True) -> list[dict]:
+    """The states written by ``write``: the arrays (copies; with ``copy=False`` views on the
+    block, for a reader that copies what it keeps before the next sync rewrites it), scalars of
+    their kind, and the rest."""
     states = [dict(r) for r in rest]
     kinds = {"float": float, "int": int, "bool": bool}
     for view, (i, key, _, _, kind) in zip(on, entries):
-        states[i][key] = view.copy() if kind == "array" else kinds[kind](view[()])
+        if kind == "array":
+            states[i][key] = view.copy() if copy else view
+        else:
+            states[i][key] = kinds[kind](view[()])
     return states

@@ -187,21 +187,20 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
             if bell.value[ABORT]:  # the orchestrator's hook failed: no further step of this advance
                 state["abort"] = True
                 return
-            conn.forward(("go",))
+            if conn.comm is not None:
+                conn.forward(("go",))
         if state["F_model"] is not None:  # ... and wrote their forces here
             backend.add_forces(state["model_ids"], state["F_model"])
             state["F_model"][:] = 0.0
         if len(state["ids"]):  # rank 0 reads the shared block, every rank sets the same values
-            V = conn.share(state["V"])  # (other ranks: None here, rank 0's values returned)
-            backend.set_velocities(state["ids"], V)
+            # (other ranks: None here, rank 0's values returned)
+            backend.set_velocities(state["ids"], state["V"] if conn.comm is None else conn.share(state["V"]))
 
     def write_states():
         """The hosted models' states into their block, when they fit its layout and are all
         numeric (else the orchestrator's sync asks for them over the socket)."""
-        states = model_states(state["models"])
-        entries, rest = state_block.layout(states)
-        if state["state_views"] is not None and entries == state["state_entries"] and not any(rest):
-            state_block.write(state["state_views"], entries, states)
+        views = state["state_views"]
+        if views is not None and state_block.write_if_fits(views, state["state_entries"], model_states(state["models"])):
             state["bell"].value[WRITTEN] = state["advances"]
 
     def run(op: str, steps: int, ask: bool, dt: float, sync: bool = False) -> tuple[float, float]:

@@ -275,15 +275,13 @@ class VerletArrays:
         only its driven components. The plan (which components of which rows) once per ids
         array (the interface's, each step) and prescription; the write compiled."""
         v = np.ascontiguousarray(v, float).reshape(-1, 3)
-        key = (ids, self._n_partial)
-        if getattr(self, "_vel_key", None) is None or any(a is not b for a, b in zip(key, self._vel_key)):
+        if ids is not getattr(self, "_vel_ids", None) or self._n_partial != self._vel_partial:
             rows = np.asarray(ids, int)
             driven = self._driven[rows]
             written = driven | ~driven.any(axis=1, keepdims=True)
             at = np.nonzero(written)
-            self._vel_key, self._vel_plan = key, (np.ascontiguousarray(rows[at[0]], np.int64),
-                                                  np.ascontiguousarray(at[1], np.int64),
-                                                  np.ascontiguousarray(at[0], np.int64))
+            self._vel_plan = tuple(np.ascontiguousarray(a, np.int64) for a in (rows[at[0]], at[1], at[0]))
+            self._vel_ids, self._vel_partial = ids, self._n_partial  # (ids held: its identity stays its own)
         put_components(self.V, *self._vel_plan, v)
 
     bulk_arrays = True  # positions read and forces written on the engine's arrays (ModelStep)

@@ -179,8 +179,9 @@ class RemoteBackend:
             return
         if (self.bell is not None and self._steps_left == 0 and self._prewrite == self._advances
                 and self.bell.value[WRITTEN] == self._advances):  # written after the advance's last step
-            set_model_states(models, state_block.read(self._state_views, self._state_entries,
-                                                      [{} for _ in models]))
+            # views on the block: each model's restore_state copies what it keeps
+            set_model_states(models, state_block.read(self._state_views, self._state_entries, [{} for _ in models],
+                                                      copy=False))
             self._synced = self._evaluations
             return
         reply = self._call("models_state", self._state_entries)
