@@ -90,16 +90,20 @@ def main() -> None:
             sets = rest[0].split(",") if rest else []
             for tree in (base, ROOT):  # compiles either side's numba caches, if stale
                 run(tree, case, mode, engine, sets, outs / "warm")
-            walls = {"base": [], "this": []}
+            walls, buckets = {"base": [], "this": []}, {"base": [], "this": []}
             for _ in range(args.repeat):
                 for side, tree in (("base", base), ("this", ROOT)):
                     walls[side].append(run(tree, case, mode, engine, sets, outs / side))
+                    buckets[side].append(json.loads((outs / side / "summary.json").read_text())["timing_s"])
             tb, tt = (statistics.median(walls[s]) for s in ("base", "this"))
             print(f"{spec}: base {tb:.1f} s, this {tt:.1f} s, ratio {tb / tt:.2f}; "
                   f"{sameness(outs / 'base', outs / 'this')}")
-            for side in ("base", "this"):
-                t = json.loads((outs / side / "summary.json").read_text())["timing_s"]
-                print(f"    {side:4s} " + ", ".join(f"{k} {v:.1f}" for k, v in t.items()))
+            for side in ("base", "this"):  # each bucket's median over the repeats
+                runs = buckets[side]
+                line = ", ".join(f"{k} {statistics.median(t[k] for t in runs):.2f}" for k in runs[0])
+                if all(t.get("dem", 0.0) > 0 for t in runs):
+                    line += f"; transport / dem {statistics.median(t['transport'] / t['dem'] for t in runs):.3f}"
+                print(f"    {side:4s} {line}")
             sys.stdout.flush()
     finally:
         subprocess.run(["git", "worktree", "remove", "--force", str(base)], cwd=ROOT, capture_output=True)
