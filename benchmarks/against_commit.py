@@ -6,9 +6,10 @@ Usage: .venv/bin/python benchmarks/against_commit.py --base REV [--repeat 1]
 The earlier commit is checked out once into a git worktree (under the system's temporary
 directory, removed at the end); each run goes there and here in turn, in fresh processes, with
 the same arguments (the same venv: only the project's code differs). Printed per run: the
-median wall time of each side and their ratio, the timing buckets of summary.json per side,
-and whether every qoi and every history series is the same to the bit (else the largest
-relative difference and its name). Each run is done once on each side before any timing, so
+median wall time of each side and their ratio, the timing buckets of summary.json per side
+(medians over the repeats, and the transport's share of the engine's time), and whether
+every qoi and every history series is the same to the bit (else the largest relative
+difference and its name). Each run is done once on each side before any timing, so
 that numba's caches are compiled (a changed kernel recompiles on its first run).
 """
 from __future__ import annotations
