@@ -132,7 +132,19 @@ def _remote_in_a_thread(engine, monkeypatch):
 
     from dem_region import backends, worker
     from dem_region.backends.remote import RemoteBackend
+    from multiprocessing import resource_tracker
+
+    class SameProcessBell(Doorbell):
+        """The worker's attachment; here in the owner's process, whose registration stays (the
+        owner's unlink unregisters it once)."""
+
+        def __init__(self, name=None):
+            super().__init__(name)
+            if name is not None:
+                resource_tracker.register(self.shm._name, "shared_memory")  # noqa: SLF001
+
     monkeypatch.setattr(backends, "get_backend", lambda name: engine)
+    monkeypatch.setattr(worker, "Doorbell", SameProcessBell)
     ours, theirs = socket.socketpair()
     serving = threading.Thread(target=worker.serve, args=(Connection(theirs.detach()), "made-up"), daemon=True)
     serving.start()
