@@ -12,6 +12,7 @@ outlives it.
 """
 from __future__ import annotations
 
+import signal
 import socket
 import sys
 import time
@@ -213,10 +214,11 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
         # the models' step: none behind the first hook (at start), the engine's after it
         state["models_dt"] = dt if op == "advance" else 0.0
         n = steps if op == "advance" else 1
+        bell = state["bell"] if conn.comm is None else None  # (several ranks: no advance is rung)
         for i in range(n):
             state["write_states"] = sync and i == n - 1 and bool(state["models"])
             getattr(backend, op)(hook)
-            if state["abort"]:
+            if state["abort"] or (bell is not None and bell.value[ABORT]):  # the orchestrator stopped it
                 break
         state["write_states"] = False
         return time.perf_counter() - t0 - state["in_hook"], state["in_models"]
@@ -341,6 +343,10 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
 
 
 def main() -> None:
+    # an interrupt (Ctrl-C reaches the whole process group) is the orchestrator's to handle: it
+    # stops the advance under way and closes the engine; the worker ends when told, or when its
+    # socket closes
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     where, engine = sys.argv[1], sys.argv[2]
     if not where.startswith("unix:"):
         sock = socket.socket(fileno=int(where))

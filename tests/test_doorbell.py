@@ -242,3 +242,58 @@ def test_an_advance_of_many_steps_hooks_each_step_and_stops_where_the_orchestrat
         remote.conn.close()
         if remote.bell is not None:
             remote.bell.close()
+
+
+def test_an_interrupt_while_the_worker_advances_stops_its_advance(monkeypatch):
+    """An exception in the orchestrator while it waits for an advance without hooks (an all-DEM
+    run; Ctrl-C) stops the worker's advance within a step (ABORT), reaches the caller, and the
+    next advance runs with the counters in step."""
+    import time
+    from dem_region.doorbell import available
+    if not available():
+        pytest.skip("the doorbell needs x86's store order")
+
+    class Engine:
+        steps = 0
+
+        def start(self, hook):
+            if hook:
+                hook()
+
+        def advance(self, hook):
+            Engine.steps += 1
+            time.sleep(1e-3)
+            if hook:
+                hook()
+
+        def finalize(self):
+            pass
+
+    class Interrupted(Backoff):
+        calls = 0
+
+        def __call__(self, poll=None):
+            Interrupted.calls += 1
+            if Interrupted.calls == 200:
+                raise KeyboardInterrupt
+            return super().__call__(poll)
+
+    remote, serving = _remote_in_a_thread(Engine, monkeypatch)
+    try:
+        remote.start(None)
+        remote.advance(None, 2)
+        assert Engine.steps == 2
+        remote._wait = Interrupted(bell=remote.bell)
+        with pytest.raises(KeyboardInterrupt):
+            remote.advance(None, 10_000)  # 10 s of steps
+        stopped = Engine.steps
+        assert 2 < stopped < 2 + 10_000
+        remote.advance(None, 3)
+        assert Engine.steps == stopped + 3 and remote._advances == 3
+        remote._call("finalize")
+        serving.join(timeout=10)
+        assert not serving.is_alive()
+    finally:
+        remote.conn.close()
+        if remote.bell is not None:
+            remote.bell.close()

@@ -228,7 +228,7 @@ class RemoteBackend:
         bell, wait = self.bell, self._wait
         if wait is not None:
             wait.reset()
-        t0, in_hook = clock(), 0.0
+        t0 = clock()
         rung = bell is not None and op == "advance" and self.ranks == 1  # (ranks: rank 0 forwards it)
         if rung:
             self._advances += 1
@@ -239,25 +239,36 @@ class RemoteBackend:
                                                 SYNC: float(prewrite)})
         else:
             self._send((op, n, between is not None, self._dt))
+        ended = [False]  # the worker's advance is over (its done, or its error on the socket)
+        try:
+            in_hook = self._serve_advance(between, n, rung, wait, ended)
+        except BaseException:  # a hook that failed here, or an interrupt: the worker stops its advance
+            if rung and not ended[0]:
+                self._abort()
+            raise
+        self._done(between, n, clock() - t0 - in_hook, *ended[1:])
+
+    def _serve_advance(self, between, n: int, rung: bool, wait: Backoff | None, ended: list) -> float:
+        """Answer the worker's hooks until its advance ends; the hooks' seconds. ``ended``
+        gets True and the worker's (engine seconds, models seconds) at the end."""
+        bell, in_hook = self.bell, 0.0
         while True:
             if bell is not None:
                 if bell.rung(HOOK, self._hooks + 1):
                     self._hooks += 1
-                    failed = True
                     try:
                         in_hook += self._hook(between)
-                        failed = False
-                    finally:  # the worker finishes its step even when the hook failed here ...
-                        if failed and rung:
-                            bell.value[ABORT] = 1.0  # ... and takes no further one
+                    except BaseException:
+                        if rung:  # the worker finishes this step and takes no further one
+                            bell.value[ABORT] = 1.0
+                        raise
+                    finally:
                         bell.ring(GO, self._hooks)
-                        if failed and rung:
-                            self._await_done()
                     wait.reset()
                     continue
                 if rung and bell.rung(DONE, self._advances):
-                    self._done(between, n, clock() - t0 - in_hook, bell.value[ENGINE_S], bell.value[MODELS_S])
-                    return
+                    ended[:] = [True, bell.value[ENGINE_S], bell.value[MODELS_S]]
+                    return in_hook
                 if not wait(self.conn.poll):
                     continue
             msg = self._recv()
@@ -265,17 +276,24 @@ class RemoteBackend:
                 in_hook += self._hook(between)
                 self._send(("go",))
             elif msg[0] == "done":
-                self._done(between, n, clock() - t0 - in_hook, *msg[1:3])
-                return
+                ended[:] = [True, *msg[1:3]]
+                return in_hook
             else:
+                ended[0] = True  # the worker failed its advance and serves again
                 self._raise(msg)
 
-    def _await_done(self, timeout: float = 30.0) -> None:
-        """After a failed hook: wait until the worker ends the advance (DONE, or its error on the
-        socket), so that the next call finds it serving; a worker that died or hangs is left to
-        ``finalize``."""
-        wait, t0 = Backoff(bell=self.bell), time.monotonic()
-        while not self.bell.rung(DONE, self._advances) and time.monotonic() - t0 < timeout:
+    def _abort(self, timeout: float = 30.0) -> None:
+        """Stop the worker's advance (ABORT; a hook it rings is answered at once) and wait until
+        it ends (DONE, or its error on the socket), so that the next call finds it serving; a
+        worker that died or hangs is left to ``finalize``."""
+        bell = self.bell
+        bell.value[ABORT] = 1.0
+        wait, t0 = Backoff(bell=bell), time.monotonic()
+        while not bell.rung(DONE, self._advances) and time.monotonic() - t0 < timeout:
+            if bell.rung(HOOK, self._hooks + 1):  # a step begun before the abort: no further one
+                self._hooks += 1
+                bell.ring(GO, self._hooks)
+                continue
             if self.proc is not None and self.proc.poll() is not None:
                 return
             if wait(self.conn.poll):
@@ -283,6 +301,7 @@ class RemoteBackend:
                     self.conn.recv()
                 except (EOFError, OSError):
                     return
+                return
 
     def _done(self, between, n: int, waited: float, engine_s: float, models_s: float) -> None:
         """Book an advance's end: ``waited`` s outside the hooks, of which the worker spent
