@@ -28,13 +28,19 @@ class PrescribedParticles:
         self.work = 0.0  # J, by the drive: minus the chain's force on the driven particles
         self.dofs = [("xyz".index(c)) for c in dofs]
         backend.prescribe(self.ids) if dofs == "xyz" else backend.prescribe(self.ids, dofs)
+        # each step's arrays, written in place: the forces on the driven particles, their
+        # velocities, the power's terms (undriven components zeroed: no work is done along them)
+        self._F, self._v, self._Fv = (np.zeros((len(self.ids), 3)) for _ in range(3))
+        self._driven = np.isin(np.arange(3), self.dofs).astype(float) if len(self.dofs) < 3 else None
 
     def between(self) -> None:
-        F = self.backend.forces(self.ids)
-        v = np.asarray(self.velocity((self.k + 0.5) * self.dt), float)
-        v = np.tile(v, (len(self.ids), 1)) if v.ndim == 1 else v  # one velocity for all, or one each
-        self.work += float(np.sum(-F[:, self.dofs] * v[:, self.dofs])) * self.dt  # midpoint rule, driven DOFs
-        self.backend.set_velocities(self.ids, v)
+        self.backend.forces_into(self.ids, self._F)
+        self._v[...] = self.velocity((self.k + 0.5) * self.dt)  # one velocity for all (3,), or one each
+        np.multiply(self._F, self._v, out=self._Fv)
+        if self._driven is not None:
+            self._Fv *= self._driven
+        self.work -= float(self._Fv.sum()) * self.dt  # midpoint rule, driven DOFs
+        self.backend.set_velocities(self.ids, self._v)
         self.k += 1
 
 
