@@ -80,7 +80,7 @@ def dem_only(p: dict, scene: DemScene, dem: str, t_end_default: float,
         backend.start(hook)
         for stage in substages:  # the first hook ran at set-up, outside the clock's stages
             stage.seconds = 0.0
-        if hosted:
+        if hasattr(backend, "transport_s"):  # a worker's start (its set-up) is not the run's transport
             backend.models_s = backend.transport_s = 0.0
     except NotImplementedError as exc:
         backend.finalize()
