@@ -40,9 +40,10 @@ HOOK, GO, ADVANCE, DONE = range(4)
 # hook, the models' dt, whether its hook failed (the worker then takes no further step of that
 # advance), whether the hosted models' states go into their block after the last step's
 # models (the sample that ends the advance reads them there: no round trip); the worker's: the
-# engine's and the hosted models' seconds of that advance, and the advance whose states it wrote
-STEPS, ASK, DT, ABORT, SYNC, ENGINE_S, MODELS_S, WRITTEN = range(8)
-VALUES = 8
+# engine's, the hosted models' and the interface's seconds of that advance (its reads and
+# writes of the engine's arrays), and the advance whose states it wrote
+STEPS, ASK, DT, ABORT, SYNC, ENGINE_S, MODELS_S, INTERFACE_S, WRITTEN = range(9)
+VALUES = 9
 
 
 # with wake-ups, a waiter yields at least this long (s) before it sleeps: a wake-up through this
@@ -131,7 +132,7 @@ def available() -> bool:
 
 
 class Doorbell:
-    """Four int64 counters (HOOK, GO, ADVANCE, DONE) and eight float64 values (STEPS ...
+    """Four int64 counters (HOOK, GO, ADVANCE, DONE) and nine float64 values (STEPS ...
     WRITTEN) in shared memory. Without ``name`` the orchestrator makes the block (and unlinks
     it in close); with it the worker attaches."""
 

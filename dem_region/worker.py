@@ -23,8 +23,8 @@ from multiprocessing.connection import Connection
 import numpy as np
 
 from dem_region import state_block, wire
-from dem_region.doorbell import (ABORT, ADVANCE, ASK, DONE, DT, ENGINE_S, GO, HOOK, MODELS_S, STEPS, SYNC, WRITTEN,
-                                 Backoff, Doorbell)
+from dem_region.doorbell import (ABORT, ADVANCE, ASK, DONE, DT, ENGINE_S, GO, HOOK, INTERFACE_S, MODELS_S, STEPS, SYNC,
+                                 WRITTEN, Backoff, Doorbell)
 
 
 def _attach_block(name: str) -> shared_memory.SharedMemory:
@@ -141,7 +141,7 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
     conn = _Ranks(conn, comm)
     state = {"ids": np.zeros(0, int), "F": None, "V": None, "blocks": [], "in_hook": 0.0,
              "model_ids": None, "X_model": None, "F_model": None,
-             "models": [], "view": None, "models_dt": 0.0, "in_models": 0.0, "ask": False,
+             "models": [], "view": None, "models_dt": 0.0, "in_models": 0.0, "in_interface": 0.0, "ask": False,
              "bell": None, "hooks": 0, "advances": 0, "state_shm": None, "state_views": None, "state_entries": None,
              "abort": False, "write_states": False,
              "go_wait": None, "advance_wait": None}
@@ -164,8 +164,10 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
                 write_states()
         if not state["ask"]:  # the orchestrator has no hook: only the models run here
             return
-        if state["F"] is not None:
+        if state["F"] is not None:  # the interface's read and write of the engine's arrays are timed
+            t0 = time.perf_counter()  # apart: an in-process engine does them in its interface stages
             backend.forces_into(state["ids"], state["F"])
+            state["in_interface"] += time.perf_counter() - t0
         if state["X_model"] is not None:  # the orchestrator's models read these positions
             backend.read_positions(state["model_ids"], state["X_model"])
         bell = state["bell"]
@@ -195,7 +197,9 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
             state["F_model"][:] = 0.0
         if len(state["ids"]):  # rank 0 reads the shared block, every rank sets the same values
             # (other ranks: None here, rank 0's values returned)
+            t0 = time.perf_counter()
             backend.set_velocities(state["ids"], state["V"] if conn.comm is None else conn.share(state["V"]))
+            state["in_interface"] += time.perf_counter() - t0
 
     def write_states():
         """The hosted models' states into their block, when they fit its layout and are all
@@ -204,13 +208,15 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
         if views is not None and state_block.write_if_fits(views, state["state_entries"], model_states(state["models"])):
             state["bell"].value[WRITTEN] = state["advances"]
 
-    def run(op: str, steps: int, ask: bool, dt: float, sync: bool = False) -> tuple[float, float]:
+    def run(op: str, steps: int, ask: bool, dt: float, sync: bool = False) -> tuple[float, float, float]:
         """Start the engine, or advance it ``steps`` steps; (the engine's own seconds, the
-        hosted models'): the orchestrator separates both from the transport. ``sync``: the
-        models' states into their block after the last step's models (write_states)."""
+        hosted models', the interface's): the orchestrator separates them from the transport.
+        ``sync``: the models' states into their block after the last step's models
+        (write_states)."""
         state["ask"] = bool(ask)  # the orchestrator has a hook to run
         hook = between if ask or state["models"] else None
-        t0, state["in_hook"], state["in_models"], state["abort"] = time.perf_counter(), 0.0, 0.0, False
+        t0, state["in_hook"], state["in_models"], state["in_interface"] = time.perf_counter(), 0.0, 0.0, 0.0
+        state["abort"] = False
         # the models' step: none behind the first hook (at start), the engine's after it
         state["models_dt"] = dt if op == "advance" else 0.0
         n = steps if op == "advance" else 1
@@ -221,7 +227,7 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
             if state["abort"] or (bell is not None and bell.value[ABORT]):  # the orchestrator stopped it
                 break
         state["write_states"] = False
-        return time.perf_counter() - t0 - state["in_hook"], state["in_models"]
+        return time.perf_counter() - t0 - state["in_hook"], state["in_models"], state["in_interface"]
 
     def handle(msg) -> bool:
         """Run one control message; False when the worker should stop."""
@@ -319,12 +325,12 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
                 state["advances"] += 1
                 v = bell.value
                 try:
-                    engine_s, models_s = run("advance", int(v[STEPS]), bool(v[ASK]), float(v[DT]), bool(v[SYNC]))
+                    seconds = run("advance", int(v[STEPS]), bool(v[ASK]), float(v[DT]), bool(v[SYNC]))
                 except (EOFError, ConnectionError):
                     raise
                 except Exception as exc:  # reported on the socket, as a message's failure
                     return handle(("raise", exc))
-                bell.ring(DONE, state["advances"], {ENGINE_S: engine_s, MODELS_S: models_s})
+                bell.ring(DONE, state["advances"], dict(zip((ENGINE_S, MODELS_S, INTERFACE_S), seconds)))
                 return True
             if wait(conn.poll):
                 break

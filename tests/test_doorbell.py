@@ -151,7 +151,7 @@ def _remote_in_a_thread(engine, monkeypatch):
     remote = object.__new__(RemoteBackend)  # its state without a child process
     remote.name, remote.ranks, remote.conn, remote.bell, remote.proc = "made-up", 1, Connection(ours.detach()), None, None
     remote._hooks = remote._advances = remote._evaluations = remote._steps_left = 0
-    remote._dt, remote._models_pending, remote.models_s, remote.transport_s = 1e-6, False, 0.0, 0.0
+    remote._dt, remote._models_pending, remote.models_s, remote.transport_s, remote.interface_s = 1e-6, False, 0.0, 0.0, 0.0
     remote._state_views, remote._prewrite, remote._wait = None, -1, None
     return remote, serving
 

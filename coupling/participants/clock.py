@@ -36,7 +36,7 @@ from fem_region.explicit import ExplicitDynamics
 from fem_region.kernels import respa_kicks
 
 from ..simulation import Stage, run_stages
-from .dem import ModelStep, hosted_by
+from .dem import ModelStep, hosted_by, worker_seconds
 
 
 def interface_band(region, W) -> np.ndarray:
@@ -95,8 +95,8 @@ class CoupledClock:
         # (numba compiling there made the engine bucket negative)
         for stage in self.hook_stages:
             stage.seconds = 0.0
-        if hasattr(dem, "transport_s"):
-            dem.transport_s = dem.models_s = 0.0
+        if hasattr(dem, "reset_worker_seconds"):
+            dem.reset_worker_seconds()
         self.sync_s = 0.0
 
     def _between(self) -> None:
@@ -221,8 +221,10 @@ class CoupledClock:
         return self.momentum_snapshot
 
     def timing_correction(self) -> dict[str, float]:
-        """A worker's messages and copies, and the models it hosts, out of the engine's bucket."""
-        transport, models = getattr(self.dem, "transport_s", 0.0), getattr(self.dem, "models_s", 0.0)
-        # the hosted models' syncs at the ledger's snapshots ran inside the fem.forces stage
-        return {"dem": -transport - models, "transport": transport + self.sync_s, "models": models,
-                "fem": -self.sync_s}
+        """A worker's transport, the models it hosts and its interface reads and writes, out of
+        the engine's bucket; the hosted models' syncs at the ledger's snapshots (run inside the
+        fem.forces stage) into the transport's."""
+        out = worker_seconds(self.dem)
+        out["transport"] = out.get("transport", 0.0) + self.sync_s
+        out["fem"] = -self.sync_s
+        return out

@@ -80,8 +80,8 @@ def dem_only(p: dict, scene: DemScene, dem: str, t_end_default: float,
         backend.start(hook)
         for stage in substages:  # the first hook ran at set-up, outside the clock's stages
             stage.seconds = 0.0
-        if hasattr(backend, "transport_s"):  # a worker's start (its set-up) is not the run's transport
-            backend.models_s = backend.transport_s = 0.0
+        if hasattr(backend, "reset_worker_seconds"):  # a worker's start (its set-up) is not the run's
+            backend.reset_worker_seconds()
     except NotImplementedError as exc:
         backend.finalize()
         raise CaseError(f"--dem {dem}: {exc}") from None
@@ -116,9 +116,7 @@ def dem_only(p: dict, scene: DemScene, dem: str, t_end_default: float,
         checkpoint=(lambda: (_state(driver, models, steps), lambda d: backend.checkpoint(d / backend.restart_file)))
         if backend.supports_checkpoint else None,
         restore=lambda state, d: _restore(state, driver, models, steps, backend, d / backend.restart_file, hosted),
-        timing_correction=lambda: {"dem": -getattr(backend, "transport_s", 0.0) - getattr(backend, "models_s", 0.0),
-                                   "transport": getattr(backend, "transport_s", 0.0),
-                                   "models": getattr(backend, "models_s", 0.0)},
+        timing_correction=lambda: worker_seconds(backend),
         sync=(lambda: backend.sync_models(models)) if hosted else None)
     return sim, backend, driver
 
@@ -140,6 +138,16 @@ def _restore(d: dict, driver, models, steps, backend, engine_file, hosted: bool 
     if driver:
         driver.k, driver.work = int(d["driver"]["k"]), float(d["driver"]["work"])
     backend.restore(engine_file)
+
+
+def worker_seconds(dem) -> dict[str, float]:
+    """The timing buckets of an engine in a worker besides its own time ({} in process): its
+    hosted models, its interface reads and writes, its transport; "dem" less all of them."""
+    if not hasattr(dem, "worker_seconds"):
+        return {}
+    out = dict(dem.worker_seconds())
+    out["dem"] = -sum(out.values())
+    return out
 
 
 def models_critical_dt(models, scene: DemScene) -> float:

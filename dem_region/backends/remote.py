@@ -23,8 +23,8 @@ from typing import Callable
 import numpy as np
 
 from .. import state_block, wire
-from ..doorbell import (ABORT, ADVANCE, ASK, DONE, DT, ENGINE_S, GO, HOOK, MODELS_S, STEPS, SYNC, WRITTEN, Backoff,
-                        Doorbell, available, can_wake, new_block)
+from ..doorbell import (ABORT, ADVANCE, ASK, DONE, DT, ENGINE_S, GO, HOOK, INTERFACE_S, MODELS_S, STEPS, SYNC, WRITTEN,
+                        Backoff, Doorbell, available, can_wake, new_block)
 from ..model_step import set_model_states
 from ..scene import DemScene
 from .base import EngineUnavailable
@@ -46,6 +46,7 @@ class RemoteBackend:
         self.restart_file = "dem.yade.bz2" if engine == "yade" else "dem.npz"
         self.transport_s = 0.0  # s spent on the transport during start / advance
         self.models_s = 0.0  # s the models hosted in the worker took (host_models)
+        self.interface_s = 0.0  # s the worker took reading and writing the interface on the engine's arrays
         self._evaluations, self._synced = 0, -1  # hosted models' steps so far, and at the last sync
         # the block the hosted models' states come through at a sync, its layout and views
         self._state_block, self._state_entries, self._state_views = None, None, None
@@ -267,7 +268,7 @@ class RemoteBackend:
                     wait.reset()
                     continue
                 if rung and bell.rung(DONE, self._advances):
-                    ended[:] = [True, bell.value[ENGINE_S], bell.value[MODELS_S]]
+                    ended[:] = [True, bell.value[ENGINE_S], bell.value[MODELS_S], bell.value[INTERFACE_S]]
                     return in_hook
                 if not wait(self.conn.poll):
                     continue
@@ -276,7 +277,7 @@ class RemoteBackend:
                 in_hook += self._hook(between)
                 self._send(("go",))
             elif msg[0] == "done":
-                ended[:] = [True, *msg[1:3]]
+                ended[:] = [True, *msg[1:4]]
                 return in_hook
             else:
                 ended[0] = True  # the worker failed its advance and serves again
@@ -303,16 +304,26 @@ class RemoteBackend:
                     return
                 return
 
-    def _done(self, between, n: int, waited: float, engine_s: float, models_s: float) -> None:
+    def _done(self, between, n: int, waited: float, engine_s: float, models_s: float, interface_s: float) -> None:
         """Book an advance's end: ``waited`` s outside the hooks, of which the worker spent
-        ``engine_s`` in the engine and ``models_s`` in the hosted models; the rest is transport
-        (messages, shared-memory copies, the worker's side of the handshake: what an in-process
-        engine does not pay)."""
+        ``engine_s`` in the engine, ``models_s`` in the hosted models and ``interface_s`` reading
+        and writing the interface on the engine's arrays (what an in-process engine does in its
+        interface stages); the rest is transport (the handshake, the shared-memory copies, the
+        worker's Python around them: what an in-process engine does not pay)."""
         if between is None:  # the worker's hosted models stepped without telling
             self._evaluations += n
             self._steps_left = 0
         self.models_s += float(models_s)
-        self.transport_s += max(0.0, waited - float(engine_s) - float(models_s))
+        self.interface_s += float(interface_s)
+        self.transport_s += max(0.0, waited - float(engine_s) - float(models_s) - float(interface_s))
+
+    def worker_seconds(self) -> dict[str, float]:
+        """The seconds of the worker's advances besides the engine's own, by timing bucket."""
+        return {"models": self.models_s, "interface": self.interface_s, "transport": self.transport_s}
+
+    def reset_worker_seconds(self) -> None:
+        """Start the books (after the start's set-up)."""
+        self.models_s = self.interface_s = self.transport_s = 0.0
 
     def _hook(self, between: Callable[[], None] | None) -> float:
         """The orchestrator's side of one engine step's hook; its wall time (s)."""
