@@ -1,12 +1,16 @@
 """The per-step handshake in shared memory (dem_region/doorbell.py): counters and values cross
 between processes in order, and the orchestrator's block is gone after close."""
 import multiprocessing as mp
-from multiprocessing import shared_memory
+import socket
+import threading
+import time
+from contextlib import contextmanager
+from multiprocessing import resource_tracker, shared_memory
 
 import numpy as np
 import pytest
 
-from dem_region.doorbell import ADVANCE, DONE, ENGINE_S, GO, HOOK, MODELS_S, STEPS, Backoff, Doorbell
+from dem_region.doorbell import ADVANCE, DONE, ENGINE_S, GO, HOOK, MODELS_S, STEPS, Backoff, Doorbell, available
 
 
 def _worker(name: str, rounds: int) -> None:
@@ -123,16 +127,37 @@ def test_with_wake_ups_a_long_wait_sleeps_until_rung_or_a_message_comes():
         theirs.close()
 
 
-def _remote_in_a_thread(engine, monkeypatch):
-    """(RemoteBackend, thread): the orchestrator's side over a socket pair against the
-    worker's serve() in a thread of this process, running the made-up ``engine`` class."""
-    import socket
-    import threading
+class SteppingEngine:
+    """A made-up engine: counts its steps (the class's ``steps``), pauses ``pause`` s in each,
+    raises at step ``fail_at``, and runs the hook after each step."""
+
+    steps, pause, fail_at = 0, 0.0, -1
+
+    def start(self, hook):
+        if hook:
+            hook()
+
+    def advance(self, hook):
+        type(self).steps += 1
+        if type(self).steps == self.fail_at:
+            raise ValueError("a bond stretched past its length")
+        time.sleep(self.pause)
+        if hook:
+            hook()
+
+    def finalize(self):
+        pass
+
+
+@contextmanager
+def remote_in_a_thread(engine, monkeypatch):
+    """The orchestrator's side (a RemoteBackend) over a socket pair against the worker's
+    serve() in a thread of this process, running the made-up ``engine`` class; at the end the
+    worker is told to finish and must have stopped."""
     from multiprocessing.connection import Connection
 
     from dem_region import backends, worker
     from dem_region.backends.remote import RemoteBackend
-    from multiprocessing import resource_tracker
 
     class SameProcessBell(Doorbell):
         """The worker's attachment; here in the owner's process, whose registration stays (the
@@ -153,37 +178,8 @@ def _remote_in_a_thread(engine, monkeypatch):
     remote._hooks = remote._advances = remote._evaluations = remote._steps_left = 0
     remote._dt, remote._models_pending, remote.models_s, remote.transport_s, remote.interface_s = 1e-6, False, 0.0, 0.0, 0.0
     remote._state_views, remote._prewrite, remote._wait = None, -1, None
-    return remote, serving
-
-
-def test_an_advance_that_fails_in_the_worker_is_reported_where_it_failed_and_the_next_one_runs(monkeypatch):
-    """The worker's serve() against the orchestrator's RemoteBackend._run over a socket pair and
-    the doorbell, with a made-up engine whose second step raises: the orchestrator raises the
-    engine's message naming the line that failed, and the counters stay in step (the third
-    advance runs)."""
-
-    class Engine:
-        steps = 0
-
-        def start(self, hook):
-            pass
-
-        def advance(self, hook):
-            Engine.steps += 1
-            if Engine.steps == 2:
-                raise ValueError("a bond stretched past its length")
-
-        def finalize(self):
-            pass
-
-    remote, serving = _remote_in_a_thread(Engine, monkeypatch)
     try:
-        remote.start(None)
-        remote.advance(None)
-        with pytest.raises(RuntimeError, match=r"ValueError: a bond stretched past its length \(test_doorbell.py:\d+\)"):
-            remote.advance(None)
-        remote.advance(None)
-        assert Engine.steps == 3 and remote._advances == 3
+        yield remote
         remote._call("finalize")
         serving.join(timeout=10)
         assert not serving.is_alive()
@@ -193,31 +189,34 @@ def test_an_advance_that_fails_in_the_worker_is_reported_where_it_failed_and_the
             remote.bell.close()
 
 
+def test_an_advance_that_fails_in_the_worker_is_reported_where_it_failed_and_the_next_one_runs(monkeypatch):
+    """The worker's serve() against the orchestrator's RemoteBackend._run over a socket pair and
+    the doorbell, with a made-up engine whose second step raises: the orchestrator raises the
+    engine's message naming the line that failed, and the counters stay in step (the third
+    advance runs)."""
+
+    class Engine(SteppingEngine):
+        steps, fail_at = 0, 2
+
+    with remote_in_a_thread(Engine, monkeypatch) as remote:
+        remote.start(None)
+        remote.advance(None)
+        with pytest.raises(RuntimeError, match=r"ValueError: a bond stretched past its length \(test_doorbell.py:\d+\)"):
+            remote.advance(None)
+        remote.advance(None)
+        assert Engine.steps == 3 and remote._advances == 3
+
+
+@pytest.mark.skipif(not available(), reason="the doorbell needs x86's store order")
 def test_an_advance_of_many_steps_hooks_each_step_and_stops_where_the_orchestrators_hook_fails(monkeypatch):
     """One advance of several steps (run_clock's block up to the next sample) crosses once each
     way and runs the orchestrator's hook after every step; when that hook raises at step k,
     the worker takes no step after k, the exception reaches the caller, and the next advance
     runs from there with the counters in step."""
-    from dem_region.doorbell import available
-    if not available():
-        pytest.skip("the doorbell needs x86's store order")
 
-    class Engine:
+    class Engine(SteppingEngine):
         steps = 0
 
-        def start(self, hook):
-            if hook:
-                hook()
-
-        def advance(self, hook):
-            Engine.steps += 1
-            if hook:
-                hook()
-
-        def finalize(self):
-            pass
-
-    remote, serving = _remote_in_a_thread(Engine, monkeypatch)
     seen = []
 
     def hook():
@@ -225,7 +224,7 @@ def test_an_advance_of_many_steps_hooks_each_step_and_stops_where_the_orchestrat
         if Engine.steps == 7:
             raise ArithmeticError("the far field diverged")
 
-    try:
+    with remote_in_a_thread(Engine, monkeypatch) as remote:
         remote.start(hook)
         remote.advance(hook, 5)
         assert seen == [0, 1, 2, 3, 4, 5] and remote._advances == 1
@@ -235,39 +234,16 @@ def test_an_advance_of_many_steps_hooks_each_step_and_stops_where_the_orchestrat
         seen.clear()
         remote.advance(hook, 3)  # the next advance starts where the failed one stopped
         assert seen == [8, 9, 10] and Engine.steps == 10 and remote._advances == 3
-        remote._call("finalize")
-        serving.join(timeout=10)
-        assert not serving.is_alive()
-    finally:
-        remote.conn.close()
-        if remote.bell is not None:
-            remote.bell.close()
 
 
+@pytest.mark.skipif(not available(), reason="the doorbell needs x86's store order")
 def test_an_interrupt_while_the_worker_advances_stops_its_advance(monkeypatch):
     """An exception in the orchestrator while it waits for an advance without hooks (an all-DEM
     run; Ctrl-C) stops the worker's advance within a step (ABORT), reaches the caller, and the
     next advance runs with the counters in step."""
-    import time
-    from dem_region.doorbell import available
-    if not available():
-        pytest.skip("the doorbell needs x86's store order")
 
-    class Engine:
-        steps = 0
-
-        def start(self, hook):
-            if hook:
-                hook()
-
-        def advance(self, hook):
-            Engine.steps += 1
-            time.sleep(1e-3)
-            if hook:
-                hook()
-
-        def finalize(self):
-            pass
+    class Engine(SteppingEngine):
+        steps, pause = 0, 1e-3
 
     class Interrupted(Backoff):
         calls = 0
@@ -278,8 +254,7 @@ def test_an_interrupt_while_the_worker_advances_stops_its_advance(monkeypatch):
                 raise KeyboardInterrupt
             return super().__call__(poll)
 
-    remote, serving = _remote_in_a_thread(Engine, monkeypatch)
-    try:
+    with remote_in_a_thread(Engine, monkeypatch) as remote:
         remote.start(None)
         remote.advance(None, 2)
         assert Engine.steps == 2
@@ -290,10 +265,3 @@ def test_an_interrupt_while_the_worker_advances_stops_its_advance(monkeypatch):
         assert 2 < stopped < 2 + 10_000
         remote.advance(None, 3)
         assert Engine.steps == stopped + 3 and remote._advances == 3
-        remote._call("finalize")
-        serving.join(timeout=10)
-        assert not serving.is_alive()
-    finally:
-        remote.conn.close()
-        if remote.bell is not None:
-            remote.bell.close()

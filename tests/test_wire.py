@@ -42,6 +42,18 @@ def test_the_other_numpy_reads_and_writes_what_this_one_does():
         assert back["a"].tobytes() == a.tobytes() and back["b"].tobytes() == (a * 2).tobytes()
 
 
+def assert_same_states(back: list[dict], states: list[dict]) -> None:
+    """``back`` holds ``states`` bit for bit: the same keys, arrays of the same dtype, shape
+    and bytes, scalars of the same type and value."""
+    for d, b in zip(states, back, strict=True):
+        assert set(b) == set(d)
+        for k, v in d.items():
+            if isinstance(v, np.ndarray):
+                assert b[k].dtype == v.dtype and b[k].shape == v.shape and b[k].tobytes() == v.tobytes()
+            else:
+                assert type(b[k]) is type(v) and b[k] == v
+
+
 @given(st.data())
 @settings(max_examples=40, deadline=None)
 def test_model_states_cross_a_shared_block_bit_for_bit(data):
@@ -71,13 +83,7 @@ def test_model_states_cross_a_shared_block_bit_for_bit(data):
         state_block.write(state_block.views(writer.buf, entries), entries, states)
         back = state_block.read(state_block.views(reader.buf, entries), entries, wire.loads(wire.dumps(rest)))
         writer.buf[:] = bytes(writer.size)  # the next sync rewrites the block: what was read stays
-        for d, b in zip(states, back):
-            assert set(b) == set(d)
-            for k, v in d.items():
-                if isinstance(v, np.ndarray):
-                    assert b[k].dtype == v.dtype and b[k].shape == v.shape and b[k].tobytes() == v.tobytes()
-                else:
-                    assert type(b[k]) is type(v) and b[k] == v
+        assert_same_states(back, states)
         # the block holds only the numeric entries, each on a float64 boundary
         at, size = state_block.offsets(entries)
         assert all(o % 8 == 0 for o in at) and size >= 8
@@ -136,13 +142,7 @@ def test_states_are_written_at_the_end_of_an_advance_only_when_they_fit_the_bloc
         assert bytes(buf) == before
         return
     back = state_block.read(on, entries, [{} for _ in other])
-    for d, b in zip(other, back):
-        assert set(b) == set(d)
-        for k, v in d.items():
-            if isinstance(v, np.ndarray):
-                assert b[k].dtype == v.dtype and b[k].shape == v.shape and b[k].tobytes() == v.tobytes()
-            else:
-                assert type(b[k]) is type(v) and b[k] == v
+    assert_same_states(back, other)
 
 
 def test_every_hosted_model_keeps_copies_of_a_sync_read_as_views():
