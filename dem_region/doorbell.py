@@ -77,12 +77,13 @@ class Backoff:
         self.bell = bell if bell is not None and bell.can_sleep else None
         self.floor = self.patience = PATIENCE if patience is None else patience
         self.adapt, self.typical = adapt, 0.0
-        self.rounds, self._since, self._drained, self._t0 = 0, None, False, 0.0
+        self.rounds, self._since, self._drained, self._t0, self._t_last = 0, None, False, 0.0, 0.0
 
     def reset(self) -> None:
-        """A wait ended (the next call starts another)."""
-        if self.adapt and self.rounds:
-            waited = min(time.perf_counter() - self._t0, PATIENCE_MAX)
+        """A wait ended (the next call starts another); call it as soon as the counter is seen.
+        The wait counted is from its first round to its last (none: it had ended before)."""
+        if self.adapt:
+            waited = min(self._t_last - self._t0, PATIENCE_MAX) if self.rounds else 0.0
             self.typical += (waited - self.typical) / 16
             self.patience = min(PATIENCE_MAX, max(self.floor, 2.0 * self.typical))
         self.rounds, self._since, self._drained = 0, None, False
@@ -90,8 +91,10 @@ class Backoff:
     def __call__(self, poll=None) -> bool:
         """One round; True when ``poll`` says a socket message is waiting."""
         self.rounds += 1
-        if self.adapt and self.rounds == 1:
-            self._t0 = time.perf_counter()
+        if self.adapt:
+            self._t_last = time.perf_counter()
+            if self.rounds == 1:
+                self._t0 = self._t_last
         if self.bell is not None and self.rounds > self.spin:
             now = time.perf_counter()
             if self._since is None:

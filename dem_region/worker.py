@@ -143,7 +143,7 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
              "model_ids": None, "X_model": None, "F_model": None,
              "models": [], "view": None, "models_dt": 0.0, "in_models": 0.0, "in_interface": 0.0, "ask": False,
              "bell": None, "hooks": 0, "advances": 0, "state_shm": None, "state_views": None, "state_entries": None,
-             "abort": False, "write_states": False,
+             "write_states": False,
              "go_wait": None, "advance_wait": None}
 
     def between():
@@ -187,8 +187,7 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
                 if wait(conn.poll):
                     handle(conn.recv())
                     wait.reset()
-            if bell.value[ABORT]:  # the orchestrator's hook failed: no further step of this advance
-                state["abort"] = True
+            if bell.value[ABORT]:  # the orchestrator stopped the advance: no further step (run)
                 return
             if conn.comm is not None:
                 conn.forward(("go",))
@@ -216,7 +215,6 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
         state["ask"] = bool(ask)  # the orchestrator has a hook to run
         hook = between if ask or state["models"] else None
         t0, state["in_hook"], state["in_models"], state["in_interface"] = time.perf_counter(), 0.0, 0.0, 0.0
-        state["abort"] = False
         # the models' step: none behind the first hook (at start), the engine's after it
         state["models_dt"] = dt if op == "advance" else 0.0
         n = steps if op == "advance" else 1
@@ -224,7 +222,7 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
         for i in range(n):
             state["write_states"] = sync and i == n - 1 and bool(state["models"])
             getattr(backend, op)(hook)
-            if state["abort"] or (bell is not None and bell.value[ABORT]):  # the orchestrator stopped it
+            if bell is not None and bell.value[ABORT]:  # the orchestrator stopped it
                 break
         state["write_states"] = False
         return time.perf_counter() - t0 - state["in_hook"], state["in_models"], state["in_interface"]

@@ -131,7 +131,7 @@ class SteppingEngine:
     """A made-up engine: counts its steps (the class's ``steps``), pauses ``pause`` s in each,
     raises at step ``fail_at``, and runs the hook after each step."""
 
-    steps, pause, fail_at = 0, 0.0, -1
+    steps, pause, fail_at, queries = 0, 0.0, -1, 0
 
     def start(self, hook):
         if hook:
@@ -144,6 +144,10 @@ class SteppingEngine:
         time.sleep(self.pause)
         if hook:
             hook()
+
+    def energies(self):  # a query: how many times it was asked
+        type(self).queries += 1
+        return {"queries": type(self).queries}
 
     def finalize(self):
         pass
@@ -177,7 +181,8 @@ def remote_in_a_thread(engine, monkeypatch):
     remote.name, remote.ranks, remote.conn, remote.bell, remote.proc = "made-up", 1, Connection(ours.detach()), None, None
     remote._hooks = remote._advances = remote._evaluations = remote._steps_left = 0
     remote._dt, remote._models_pending, remote.models_s, remote.transport_s, remote.interface_s = 1e-6, False, 0.0, 0.0, 0.0
-    remote._state_views, remote._prewrite, remote._wait = None, -1, None
+    remote._state_views, remote._prewrite, remote._wait = None, False, None
+    remote._advancing, remote._replies_owed, remote._stuck = False, 0, False
     try:
         yield remote
         remote._call("finalize")
@@ -265,3 +270,31 @@ def test_an_interrupt_while_the_worker_advances_stops_its_advance(monkeypatch):
         assert 2 < stopped < 2 + 10_000
         remote.advance(None, 3)
         assert Engine.steps == stopped + 3 and remote._advances == 3
+
+
+@pytest.mark.skipif(not available(), reason="the doorbell needs x86's store order")
+def test_an_interrupt_while_a_hook_waits_for_a_query_leaves_no_stale_reply(monkeypatch):
+    """Ctrl-C while the orchestrator's hook waits for a query's reply (a sample's energies): the
+    advance stops, the reply that was on its way is read off, and the next query gets its own
+    answer, not that one."""
+
+    class Engine(SteppingEngine):
+        steps, queries = 0, 0
+
+    with remote_in_a_thread(Engine, monkeypatch) as remote:
+        receive = remote._recv
+
+        def interrupted():
+            monkeypatch.setattr(remote, "_recv", receive)  # once
+            raise KeyboardInterrupt
+
+        def hook():
+            if Engine.steps == 3:
+                monkeypatch.setattr(remote, "_recv", interrupted)
+                remote._call("call", "energies")
+
+        remote.start(None)
+        with pytest.raises(KeyboardInterrupt):
+            remote.advance(hook, 10)
+        assert Engine.steps == 3 and Engine.queries == 1
+        assert remote._call("call", "energies")[1] == {"queries": 2}

@@ -52,7 +52,9 @@ class RemoteBackend:
         self._state_block, self._state_entries, self._state_views = None, None, None
         # the advance after whose last step's models the worker writes their states into that
         # block (SYNC), and the steps of the current advance not yet hooked
-        self._prewrite, self._steps_left = -1, 0
+        self._prewrite, self._steps_left = False, 0
+        # an advance under way; the replies owed to queries sent; an advance that would not stop
+        self._advancing, self._replies_owed, self._stuck = False, 0, False
         self._dt = 0.0
         env = dict(env if env is not None else os.environ)
         env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
@@ -128,9 +130,11 @@ class RemoteBackend:
             self._models_pending = False
             self._call("models_flush")
         self._send(msg)
+        self._replies_owed += 1
         if then is not None:
             then(self.conn.fileno())
         reply = self._recv()
+        self._replies_owed -= 1
         if reply[0] == "error":
             self._raise(reply)
         return reply
@@ -178,7 +182,7 @@ class RemoteBackend:
         (dem_region/state_block.py) made to the layout the worker announces."""
         if self._synced == self._evaluations:
             return
-        if (self.bell is not None and self._steps_left == 0 and self._prewrite == self._advances
+        if (self.bell is not None and self._steps_left == 0 and self._prewrite
                 and self.bell.value[WRITTEN] == self._advances):  # written after the advance's last step
             # views on the block: each model's restore_state copies what it keeps
             set_model_states(models, state_block.read(self._state_views, self._state_entries, [{} for _ in models],
@@ -208,7 +212,7 @@ class RemoteBackend:
         """The hosted models set to ``states`` (model_states form: a checkpoint restored)."""
         self._call("set_models_state", wire.dumps(states))
         self._evaluations += 1  # the copies here may differ from the worker's now
-        self._prewrite = -1  # and the states in the block are older than the worker's
+        self._prewrite = False  # and the states in the block are older than the worker's
 
     def prescribe(self, ids: np.ndarray, dofs: str = "xyz") -> None:
         if dofs != "xyz":  # a partial prescription (symmetry plane): no interface arrays
@@ -229,29 +233,30 @@ class RemoteBackend:
         bell, wait = self.bell, self._wait
         if wait is not None:
             wait.reset()
+        if self._stuck:
+            raise EngineUnavailable(f"--dem {self.name}: the engine worker did not stop an advance it was told to stop")
         t0 = clock()
         rung = bell is not None and op == "advance" and self.ranks == 1  # (ranks: rank 0 forwards it)
         if rung:
             self._advances += 1
-            self._steps_left = n if op == "advance" else 0
-            prewrite = self._state_views is not None  # the block is made at the first sync
-            self._prewrite = self._advances if prewrite else -1
+            self._steps_left = n
+            self._prewrite = self._state_views is not None  # (the block is made at the first sync)
             bell.ring(ADVANCE, self._advances, {STEPS: n, ASK: float(between is not None), DT: self._dt, ABORT: 0.0,
-                                                SYNC: float(prewrite)})
+                                                SYNC: float(self._prewrite)})
         else:
             self._send((op, n, between is not None, self._dt))
-        ended = [False]  # the worker's advance is over (its done, or its error on the socket)
+        self._advancing = True  # until the worker's done, or its error on the socket
         try:
-            in_hook = self._serve_advance(between, n, rung, wait, ended)
+            in_hook, seconds = self._serve_advance(between, rung, wait)
         except BaseException:  # a hook that failed here, or an interrupt: the worker stops its advance
-            if rung and not ended[0]:
+            if rung and self._advancing:
                 self._abort()
             raise
-        self._done(between, n, clock() - t0 - in_hook, *ended[1:])
+        self._done(between, n, clock() - t0 - in_hook, *seconds)
 
-    def _serve_advance(self, between, n: int, rung: bool, wait: Backoff | None, ended: list) -> float:
-        """Answer the worker's hooks until its advance ends; the hooks' seconds. ``ended``
-        gets True and the worker's (engine seconds, models seconds) at the end."""
+    def _serve_advance(self, between, rung: bool, wait: Backoff | None) -> tuple[float, tuple]:
+        """Answer the worker's hooks until its advance ends: (the hooks' seconds, the worker's
+        engine, models and interface seconds)."""
         bell, in_hook = self.bell, 0.0
         while True:
             if bell is not None:
@@ -268,8 +273,8 @@ class RemoteBackend:
                     wait.reset()
                     continue
                 if rung and bell.rung(DONE, self._advances):
-                    ended[:] = [True, bell.value[ENGINE_S], bell.value[MODELS_S], bell.value[INTERFACE_S]]
-                    return in_hook
+                    self._advancing = False
+                    return in_hook, (bell.value[ENGINE_S], bell.value[MODELS_S], bell.value[INTERFACE_S])
                 if not wait(self.conn.poll):
                     continue
             msg = self._recv()
@@ -277,32 +282,45 @@ class RemoteBackend:
                 in_hook += self._hook(between)
                 self._send(("go",))
             elif msg[0] == "done":
-                ended[:] = [True, *msg[1:4]]
-                return in_hook
+                self._advancing = False
+                return in_hook, tuple(msg[1:4])
             else:
-                ended[0] = True  # the worker failed its advance and serves again
+                self._advancing = False  # the worker failed its advance and serves again
                 self._raise(msg)
 
     def _abort(self, timeout: float = 30.0) -> None:
-        """Stop the worker's advance (ABORT; a hook it rings is answered at once) and wait until
-        it ends (DONE, or its error on the socket), so that the next call finds it serving; a
-        worker that died or hangs is left to ``finalize``."""
+        """Stop the worker's advance and wait until it has ended, so that the next call finds it
+        serving: ABORT raised, every hook it rings answered at once, the reply to a query the
+        interrupted hook made read off the socket, until its done or its error. The models'
+        copies here are synced again by a round trip. A worker that does not stop in
+        ``timeout`` s is left to ``finalize`` (further advances are refused)."""
         bell = self.bell
         bell.value[ABORT] = 1.0
+        self._prewrite, self._evaluations = False, self._evaluations + 1  # the steps it took are not known here
         wait, t0 = Backoff(bell=bell), time.monotonic()
-        while not bell.rung(DONE, self._advances) and time.monotonic() - t0 < timeout:
-            if bell.rung(HOOK, self._hooks + 1):  # a step begun before the abort: no further one
-                self._hooks += 1
-                bell.ring(GO, self._hooks)
-                continue
-            if self.proc is not None and self.proc.poll() is not None:
+        while self._advancing:
+            if time.monotonic() - t0 > timeout:
+                self._stuck = True
                 return
-            if wait(self.conn.poll):
+            hooked = int(bell.count[HOOK])
+            if hooked > int(bell.count[GO]):  # a step begun before the abort (its go perhaps never rung)
+                self._hooks = hooked
+                bell.ring(GO, hooked)
+            if bell.rung(DONE, self._advances):
+                self._advancing = False
+            elif self.proc is not None and self.proc.poll() is not None:
+                return
+            elif wait(self.conn.poll):
                 try:
-                    self.conn.recv()
+                    reply = self.conn.recv()
                 except (EOFError, OSError):
                     return
-                return
+                self._replies_owed = max(0, self._replies_owed - 1)
+                if reply[0] == "error":  # the advance itself failed: the worker serves again
+                    self._advancing = False
+        while self._replies_owed and self.conn.poll(timeout):  # a query's reply that came before the done
+            self.conn.recv()
+            self._replies_owed -= 1
 
     def _done(self, between, n: int, waited: float, engine_s: float, models_s: float, interface_s: float) -> None:
         """Book an advance's end: ``waited`` s outside the hooks, of which the worker spent
@@ -456,9 +474,11 @@ class RemoteBackend:
         self._call("call", "restore", str(path))
 
     def finalize(self) -> None:
-        if self.proc.poll() is None:
-            try:
-                self._call("finalize")
+        if self.proc.poll() is None and not self._stuck:
+            try:  # a worker that does not answer in 10 s is killed below
+                self._send(("finalize",))
+                if self.conn.poll(10.0):
+                    self._recv()
             except (EngineUnavailable, RuntimeError, OSError):
                 pass
         self.conn.close()
