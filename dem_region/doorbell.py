@@ -146,11 +146,10 @@ class Doorbell:
         self.shm = new_block(8 * (4 + VALUES)) if self.owner else shared_memory.SharedMemory(name=name)
         if not self.owner:  # Python < 3.13 registers attached blocks too and would unlink it at exit
             resource_tracker.unregister(self.shm._name, "shared_memory")  # noqa: SLF001
-        self.count = np.ndarray((4,), dtype=np.int64, buffer=self.shm.buf)
-        self._counts = self.shm.buf[:32].cast("q")  # the same counters: a waiter reads one each round
+        self.count = self.shm.buf[:32].cast("q")  # int64s; a waiter reads one each round (cheaper than numpy's)
         self.value = np.ndarray((VALUES,), dtype=np.float64, buffer=self.shm.buf, offset=32)
         if self.owner:
-            self.count[:] = 0
+            self.shm.buf[:32] = bytes(32)
             self.value[:] = 0.0
         self.name = self.shm.name
 
@@ -164,7 +163,7 @@ class Doorbell:
             os.eventfd_write(self._ring_fd, 1)
 
     def rung(self, which: int, k: int) -> bool:
-        return self._counts[which] >= k
+        return self.count[which] >= k
 
     # -- wake-ups ------------------------------------------------------------------------------
     def send_wakeups(self, sock_fd: int) -> None:
@@ -209,8 +208,8 @@ class Doorbell:
             os.close(self._wake_fd)
             os.close(self._ring_fd)
             self.can_sleep = False
+        self.count.release()
         self.count = self.value = None
-        self._counts.release()
         self.shm.close()
         if self.owner:
             self.shm.unlink()

@@ -50,8 +50,8 @@ class RemoteBackend:
         self._evaluations, self._synced = 0, -1  # hosted models' steps so far, and at the last sync
         # the block the hosted models' states come through at a sync, its layout and views
         self._state_block, self._state_entries, self._state_views = None, None, None
-        # the advance after whose last step's models the worker writes their states into that
-        # block (SYNC), and the steps of the current advance not yet hooked
+        # whether the worker writes their states into that block after the models of the current
+        # advance's last step (SYNC), and the steps of that advance not yet hooked
         self._prewrite, self._steps_left = False, 0
         # an advance under way; the replies owed to queries sent; an advance that would not stop
         self._advancing, self._replies_owed, self._stuck = False, 0, False
