@@ -198,3 +198,25 @@ def kinetic_energy(m, v):
             w += v[i, k] * v[i, k]
         e += m[i] * w
     return 0.5 * e
+
+
+@kernel
+def face_points(x, nodes, w, start):
+    """Node-to-face points into rows start + q of x (n + k, 3) m: x[start + q] = sum_a
+    w[q, a] x[nodes[q, a]] (nodes, w (k, f): each point's face nodes and shape functions)."""
+    for q in range(nodes.shape[0]):
+        for c in range(3):
+            s = 0.0
+            for a in range(nodes.shape[1]):
+                s += w[q, a] * x[nodes[q, a], c]
+            x[start + q, c] = s
+
+
+@kernel
+def face_forces(f, nodes, w, start):
+    """The forces on the node-to-face points (rows start + q of f (n + k, 3) N) passed to their
+    face nodes by the same weights: f[nodes[q, a]] += w[q, a] f[start + q]."""
+    for q in range(nodes.shape[0]):
+        for a in range(nodes.shape[1]):
+            for c in range(3):
+                f[nodes[q, a], c] += w[q, a] * f[start + q, c]

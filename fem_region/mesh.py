@@ -101,6 +101,21 @@ def box(xs: np.ndarray, ys: np.ndarray, zs: np.ndarray, element: str = "hex8") -
     return ELEMENTS[element].mesh_cls.init_tensor(*(np.asarray(c, float) for c in (xs, ys, zs)))
 
 
+def joined(*meshes: skfem.Mesh) -> tuple[skfem.Mesh, list[np.ndarray]]:
+    """One mesh of several of one element type that share no node (their nodes and elements
+    numbered in turn), and each part's element indices in it: parts meshed independently, e.g.
+    the two sides of a node-to-face interface (fem_region.node_to_face)."""
+    kinds = {type(m) for m in meshes}
+    if len(kinds) != 1:
+        raise ValueError(f"meshes of {sorted(k.__name__ for k in kinds)}: one element type")
+    offsets = np.cumsum([0] + [m.p.shape[1] for m in meshes])
+    first = np.cumsum([0] + [m.t.shape[1] for m in meshes])
+    p = np.hstack([m.p for m in meshes])
+    t = np.hstack([m.t + o for m, o in zip(meshes, offsets)])
+    parts = [np.arange(a, b) for a, b in zip(first[:-1], first[1:])]
+    return kinds.pop()(np.ascontiguousarray(p), np.ascontiguousarray(t)), parts
+
+
 def read(path: str | Path) -> skfem.Mesh:
     """Any mesh meshio reads (Gmsh .msh, XDMF, VTK ...) as a scikit-fem mesh."""
     return skfem.Mesh.load(str(path))

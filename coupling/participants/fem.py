@@ -8,6 +8,7 @@ import numpy as np
 from fem_region import mesh
 from fem_region.elements import ELEMENTS
 from fem_region.explicit import ExplicitDynamics
+from fem_region.kernels import face_forces, face_points
 from fem_region.region import FORMULATIONS, INTEGRATIONS, FemRegion
 
 from ..params import CaseError, Param
@@ -134,9 +135,34 @@ class FemNodes:
     def rows_of(self, ids):
         return ids
 
+    def collect(self) -> np.ndarray:
+        """(n, 3) N: the forces the bonds left on the nodes."""
+        return self.f
+
     def model(self, bonds, dyn: ExplicitDynamics) -> "NodeBondForces":
         """A node-force model for ExplicitDynamics.node_forces that evaluates ``bonds``."""
         return NodeBondForces(self, bonds, dyn)
+
+
+class FaceNodes(FemNodes):
+    """FemNodes and, after the n nodes, the k node-to-face points of ``face``
+    (fem_region.node_to_face): rows n + q of x (n + k, 3) m follow their faces' nodes, and the
+    bonds' forces on them (rows of f) go back to those nodes by the same weights."""
+
+    def __init__(self, dyn: ExplicitDynamics, face):
+        n = dyn.region.n_nodes
+        self.dyn, self.n = dyn, n
+        self.nodes, self.weights = np.ascontiguousarray(face.nodes, np.int64), np.ascontiguousarray(face.weights)
+        self.x = np.zeros((n + len(self.nodes), 3))
+        self.f = np.zeros((n + len(self.nodes), 3))
+
+    def refresh(self) -> None:
+        np.add(self.dyn.region.X, self.dyn.state.u, out=self.x[: self.n, : self.dyn.region.dim])
+        face_points(self.x, self.nodes, self.weights, self.n)
+
+    def collect(self) -> np.ndarray:
+        face_forces(self.f, self.nodes, self.weights, self.n)
+        return self.f[: self.n]
 
 
 class NodeBondForces:
@@ -153,7 +179,7 @@ class NodeBondForces:
         self.nodes.refresh()
         self.bonds.apply(self.nodes, self.dyn.state.t - self.last)
         self.last = self.dyn.state.t
-        return self.nodes.f
+        return self.nodes.collect()
 
     def checkpoint_state(self) -> dict:
         return {"bonds": self.bonds.checkpoint_state(), "last": self.last}
@@ -186,14 +212,48 @@ def cohesive_node_bonds(dyn: ExplicitDynamics, pairs: np.ndarray, area: np.ndarr
     return bonds
 
 
-def cohesive_penalty(dyn: ExplicitDynamics, pairs: np.ndarray, area: np.ndarray, K: float) -> float:
+def node_to_face_bonds(dyn: ExplicitDynamics, face, law, friction: float):
+    """LawBonds joining a ply interface meshed independently on its two sides (``face``:
+    fem_region.node_to_face.NodeToFace): each slave node to its point on the other side's face,
+    evaluated on FaceNodes at each force evaluation; normal +y (2D) or +z (3D), from the lower
+    side. The stable step is that of elements and bonds together, as cohesive_node_bonds: by
+    Gershgorin, a bond of stiffness k adds 2 k to its slave's row and 2 k w_a to each face node's
+    (the coupling vector (1, -w) has |1| + sum w = 2), doubled as there."""
+    from physics.law_bonds import LawBonds
+    n, dim, k = dyn.region.n_nodes, dyn.region.dim, len(face.slave)
+    X = np.pad(dyn.region.X, ((0, 0), (0, 3 - dim)))
+    X = np.vstack([X, face.points(X)])
+    point = n + np.arange(k)
+    pairs = np.column_stack([point, face.slave] if face.slave_above else [face.slave, point])
+    normal = np.zeros((k, 3))
+    normal[:, dim - 1] = 1.0
+    bonds = LawBonds(pairs, X, normal, face.area, law, friction=friction, label="interlaminar")
+    dyn.node_forces = [FaceNodes(dyn, face).model(bonds, dyn)]
+    k_bond = law.K * face.area
+    row = np.bincount(face.slave, 2 * k_bond, minlength=n)
+    row += np.bincount(face.nodes.ravel(), (2 * k_bond[:, None] * face.weights).ravel(), minlength=n)
+    omega_el = 2.0 / dyn.region.critical_dt(dyn.density_scale)
+    dyn.critical_dt_extra = float(2.0 / np.sqrt(omega_el**2 + np.max(2 * row / dyn.m)))
+    return bonds
+
+
+def face_pair_mass(dyn: ExplicitDynamics, face) -> np.ndarray:
+    """(k,) kg, the lightest node of each node-to-face bond (its slave and the face nodes it
+    loads): the mass cohesive_penalty limits the stiffness by."""
+    m_face = np.where(face.weights > 0, dyn.m[face.nodes], np.inf).min(axis=1)
+    return np.minimum(dyn.m[face.slave], m_face)
+
+
+def cohesive_penalty(dyn: ExplicitDynamics, pairs: np.ndarray, area: np.ndarray, K: float,
+                     m_pair: np.ndarray | None = None) -> float:
     """Pa/m, the stiffness per area K, or at most m / (A dt_el^2) (the lighter node's mass m, the
     pair's area A): the pairs then lower the elements' stable step to dt_el / sqrt(2) at most
     (cohesive_node_bonds). Softer costs accuracy, not only time: at a quarter of it the seed
     beam's cohesive plies bent 2.5 % more than tied ones (a half: 1.35 %; the limit: under 1 %),
     since a pair at the limit is already about as compliant as two element rows."""
     dt_el = dyn.region.critical_dt(dyn.density_scale)
-    m_pair = np.minimum(dyn.m[pairs[:, 0]], dyn.m[pairs[:, 1]])
+    if m_pair is None:  # (node-to-face bonds: face_pair_mass)
+        m_pair = np.minimum(dyn.m[pairs[:, 0]], dyn.m[pairs[:, 1]])
     return float(min(K, np.min(m_pair / area) / dt_el**2))
 
 
