@@ -11,6 +11,8 @@ and on every engine.
 """
 import re
 
+import h5py
+import numpy as np
 import pytest
 from hypothesis import HealthCheck, Phase, assume, given, settings
 from hypothesis import strategies as st
@@ -161,6 +163,43 @@ def test_all_fem_specimens_hold_over_their_ranges(femdem, case, m, h, L_rel, a_r
     assert s["counts"]["particles"] == 0 and s["counts"]["interface_bonds"] > 0
 
 
+UPPER = st.floats(0.6, 1.8)  # the upper arm's element length / the lower's: arms meshed apart, node to face
+
+
+def apart(sets, ratio: float) -> list[str]:
+    """All-FEM sets with the upper arm's elements ``ratio`` times the lower's (node to face)."""
+    lower = next(float(a.split("=")[-1]) for a in sets if "mesh.element_length" in a)
+    return [*sets, f"--set=mesh.upper_element_length={ratio * lower}"]
+
+
+@pytest.mark.parametrize("case", ["dcb_coarse", "enf_coarse", pytest.param("mixed_mode_coarse", marks=pytest.mark.slow)])
+@COARSE
+@given(m=MATERIAL, h=THICK, L_rel=st.floats(1.2, 2.0), a_rel=st.floats(0.4, 0.6), dcb_a=st.floats(1.0, 1.6), r=RADIUS,
+       ratio=UPPER)
+def test_all_fem_specimens_hold_with_their_arms_meshed_apart(femdem, case, m, h, L_rel, a_rel, dcb_a, r, ratio):
+    """All-FEM with the arms meshed independently (mesh.upper_element_length; issue #24's
+    non-matching meshes): the finer arm's nodes bonded to the other arm's edges, node to face.
+    The same closed forms at the same tolerances, anywhere in the ranges."""
+    s = run_in_domain(femdem, case, apart(fem_sets(case, m, h, L_rel, a_rel, dcb_a, r), ratio))
+    assert_checks(s)
+    assert s["counts"]["particles"] == 0 and s["counts"]["interface_bonds"] > 0
+
+
+def test_node_to_face_on_coincident_arms_is_the_node_pairs(femdem, tmp_path):
+    """Arms meshed apart with equal elements (node to face, every point on a node) give what the
+    doubled nodes joined pair by pair give, to round-off (the DCB's load and opening histories
+    into its loading)."""
+    sets = ["--mode", "fem", "--set=clock.t_end=2.5e-4"]
+    for extra in ([], ["--set=mesh.upper_element_length=5e-4"]):
+        assert femdem("run", "dcb_coarse", *sets, *extra)[0] == 0
+    with h5py.File(tmp_path / "run0" / "history.h5") as a, h5py.File(tmp_path / "run1" / "history.h5") as b:
+        for key in ("load", "opening"):
+            x, y = a["history"][key][()], b["history"][key][()]
+            assert len(x) == len(y) > 100
+            np.testing.assert_allclose(y, x, rtol=1e-8, atol=1e-8 * np.abs(x).max())
+            assert np.abs(x).max() > 0
+
+
 # the loading of either specimen kind, drawn together (each takes its own)
 LOAD = st.fixed_dictionaries({"dcb": st.fixed_dictionaries(DCB_LOAD), "bending": st.fixed_dictionaries(BENDING_LOAD)})
 
@@ -174,9 +213,11 @@ def specimen_sets(case, m, h, L_rel, a_rel, dcb_a, substeps, r, load=None):
 @pytest.mark.slow
 @WIDE
 @given(case=st.sampled_from(["dcb_coarse", "enf_coarse", "mixed_mode_coarse"]), m=MATERIAL, h=THICK,
-       L_rel=st.floats(1.2, 2.5), a_rel=st.floats(0.4, 0.6), dcb_a=st.floats(1.0, 2.0), r=RADIUS, load=LOAD)
-def test_all_fem_specimens_hold_over_wider_draws(femdem, case, m, h, L_rel, a_rel, dcb_a, r, load):
-    s = run_in_domain(femdem, case, fem_sets(case, m, h, L_rel, a_rel, dcb_a, r, load))
+       L_rel=st.floats(1.2, 2.5), a_rel=st.floats(0.4, 0.6), dcb_a=st.floats(1.0, 2.0), r=RADIUS, load=LOAD,
+       ratio=st.one_of(st.just(0.0), UPPER))
+def test_all_fem_specimens_hold_over_wider_draws(femdem, case, m, h, L_rel, a_rel, dcb_a, r, load, ratio):
+    sets = fem_sets(case, m, h, L_rel, a_rel, dcb_a, r, load)
+    s = run_in_domain(femdem, case, apart(sets, ratio) if ratio else sets)
     assert_checks(s)
 
 
@@ -202,6 +243,7 @@ def test_delamination_specimens_hold_on_every_engine(femdem, case, engine, m, h,
      "interface.GIc"),  # below Z0^2 / (2 K): linear softening cannot start
     (["--set=material.E11=30e9"], "material.E11"),  # outside the verified range
     (["--set=zone.particle_size=0.6e-3"], "zone.particle_size"),  # coarser than h / 6 (h = 3 mm)
+    (["--set=mesh.upper_element_length=0.4e-3"], "mesh.upper_element_length"),  # arms meshed apart: all-FEM only
 ])
 def test_dcb_refuses_what_it_cannot_model(femdem, sets, key):
     code, s, err = femdem("run", "dcb_coarse", *sets)

@@ -58,7 +58,7 @@ def joined_dynamics(element, n_lower, n_upper, K=1e14):
     r = region(m, element)
     face = node_to_face(m.p, m.t, lower, upper, axis, H, 1e-9)
     dyn = ExplicitDynamics(r)
-    bonds = node_to_face_bonds(dyn, face, law(K), 0.0)
+    bonds = node_to_face_bonds(dyn, face, face.area, law(K), 0.0)
     return dyn, face, bonds
 
 
@@ -113,7 +113,7 @@ def vibrate(r, face, share: float, duration: float) -> tuple[float, float, float
     change| / start, the bonds' dissipation / start, the stable step / the elements' own)."""
     dyn = ExplicitDynamics(r)
     K = cohesive_penalty(dyn, None, face.area, 1e20, face_pair_mass(dyn, face))
-    bonds = node_to_face_bonds(dyn, face, law(K), 0.0)
+    bonds = node_to_face_bonds(dyn, face, face.area, law(K), 0.0)
     X = r.X
     v = np.zeros_like(X)
     v[:, 0] = 0.3 * np.sin(np.pi * X[:, 0] / 4e-3) * np.sign(X[:, -1] - H + 1e-12)

@@ -212,9 +212,10 @@ def cohesive_node_bonds(dyn: ExplicitDynamics, pairs: np.ndarray, area: np.ndarr
     return bonds
 
 
-def node_to_face_bonds(dyn: ExplicitDynamics, face, law, friction: float):
+def node_to_face_bonds(dyn: ExplicitDynamics, face, area: np.ndarray, law, friction: float):
     """LawBonds joining a ply interface meshed independently on its two sides (``face``:
-    fem_region.node_to_face.NodeToFace): each slave node to its point on the other side's face,
+    fem_region.node_to_face.NodeToFace; area (k,) m^2 each slave stands for: face.area, times
+    the slice's thickness in 2D): each slave node to its point on the other side's face,
     evaluated on FaceNodes at each force evaluation; normal +y (2D) or +z (3D), from the lower
     side. The stable step is that of elements and bonds together, as cohesive_node_bonds: by
     Gershgorin, a bond of stiffness k adds 2 k to its slave's row and 2 k w_a to each face node's
@@ -227,9 +228,9 @@ def node_to_face_bonds(dyn: ExplicitDynamics, face, law, friction: float):
     pairs = np.column_stack([point, face.slave] if face.slave_above else [face.slave, point])
     normal = np.zeros((k, 3))
     normal[:, dim - 1] = 1.0
-    bonds = LawBonds(pairs, X, normal, face.area, law, friction=friction, label="interlaminar")
+    bonds = LawBonds(pairs, X, normal, area, law, friction=friction, label="interlaminar")
     dyn.node_forces = [FaceNodes(dyn, face).model(bonds, dyn)]
-    k_bond = law.K * face.area
+    k_bond = law.K * bonds.area
     row = np.bincount(face.slave, 2 * k_bond, minlength=n)
     row += np.bincount(face.nodes.ravel(), (2 * k_bond[:, None] * face.weights).ravel(), minlength=n)
     omega_el = 2.0 / dyn.region.critical_dt(dyn.density_scale)

@@ -76,7 +76,7 @@ def domain(p: dict, mode: str = "coupled") -> tuple[tuple[float, float], list[st
     cf = closed_form(p)
     dl.check_pace(p, "load.final_opening_factor", PERIODS_TO_PEAK)
     d = dl.bond_spacing(p, mode)
-    warnings = dl.strength_warnings(p, d, dl.keys_of(mode), fewest={"interface.Z0": FEWEST_BONDS})
+    warnings = dl.strength_warnings(p, d, dl.keys_of(mode, p), fewest={"interface.Z0": FEWEST_BONDS})
     return window(p, cf, final_crack_length(p, cf), d), warnings + zone_warnings(p, d, mode)
 
 
@@ -95,7 +95,7 @@ def zone_warnings(p: dict, d: float, mode: str) -> list[str]:
     """Where corrected beam theory (LEFM) does not describe the cohesive model: a mode I
     cohesive zone longer than LONGEST_ZONE x a0."""
     a0 = p["geometry.crack_length"]
-    Z0 = dl.resolved_strengths(p, d, dl.keys_of(mode))[0]
+    Z0 = dl.resolved_strengths(p, d, dl.keys_of(mode, p))[0]
     l_cz = dl.cohesive_zone_length(p, p["interface.GIc"], Z0, "I")
     if l_cz > LONGEST_ZONE * a0:
         return [f"the mode I cohesive zone (about {1e3 * l_cz:.3g} mm) is longer than {LONGEST_ZONE:g} x a0 = "
@@ -184,7 +184,7 @@ def evaluate(p: dict, h: dict, mode: str):
     tip, D = np.asarray(h["crack_tip"]), np.asarray(h["interface_dissipated"])
     k = dl.peak_before_growth(P, tip, p["geometry.crack_length"], 1e-3)
     d = dl.bond_spacing(p, mode)
-    Z0, R0 = dl.resolved_strengths(p, d, dl.keys_of(mode))
+    Z0, R0 = dl.resolved_strengths(p, d, dl.keys_of(mode, p))
     qoi = {"Z0_used": Z0, "R0_used": R0, "peak_load": float(P[k]), "opening_at_peak": float(delta[k])}
     qoi["initial_compliance"] = dl.initial_compliance(P, delta, k, 0.4)
     qoi.update(dl.cohesive_zone_qoi(p, h, k, p["interface.GIc"], Z0, "I", d))

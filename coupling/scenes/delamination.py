@@ -41,10 +41,12 @@ from physics.laws import MIXED_MODE, HashinCohesiveLaw
 from dem_region.scene import DemScene
 from fem_region import materials, mesh
 from fem_region.explicit import ExplicitDynamics
+from fem_region.node_to_face import NodeToFace, node_to_face
 
 from ..params import CaseError, Param
 from ..participants.coupled import coupled_simulation
-from ..participants.fem import FEM_OPTIONS, cohesive_node_bonds, cohesive_penalty, energies_with, fem_only, make_region
+from ..participants.fem import (FEM_OPTIONS, cohesive_node_bonds, cohesive_penalty, energies_with, face_pair_mass,
+                                fem_only, make_region, node_to_face_bonds)
 
 def ranged(default: float, doc: str, unit: str, low: float, high: float) -> Param:
     """A parameter inside the range over which the specimens are verified (tests/test_delamination_ranges.py
@@ -79,6 +81,10 @@ PARAMETERS: dict[str, Param] = {
     "mesh.elements_through": Param(3, "FEM elements through each arm outside the band", kind="int", low=1, high=40),
     "mesh.element_length": Param(0.0, "FEM element length along the beam; 0 = 2 d (coupled: the arms), d (fem: "
                                  "the node pairs resolve the cohesive zone as the particles do)", unit="m", low=0.0),
+    "mesh.upper_element_length": Param(0.0, "fem: FEM element length along the upper arm; 0 = the lower arm's "
+                                       "(the arms' nodes coincide, joined pair by pair); another meshes the arms "
+                                       "independently, joined node to face (the finer arm's nodes to the other's "
+                                       "faces, the seed's node-to-face bonding)", unit="m", low=0.0),
     "load.ramp_time": Param(0.0, "time over which the load-point speed ramps up; 0 = two periods of the "
                             "cracked arm", unit="s", low=0.0),
     **{k: v for k, v in FEM_OPTIONS.items() if k not in ("mesh.element", "fem.hypothesis")},
@@ -126,6 +132,7 @@ class Specimen:
     pairs: np.ndarray | None = None
     pair_area: np.ndarray | None = None
     a0: float = 0.0  # m, the initial crack: bonds behind it start debonded
+    face: NodeToFace | None = None  # all-FEM with the arms meshed independently: node-to-face bonds
 
 
 def slice_ply(p: dict) -> np.ndarray:
@@ -194,7 +201,13 @@ def bond_spacing(p: dict, mode: str) -> float:
     """m, the spacing of the bonds across the crack plane: the particles' (coupled) or the FEM
     nodes' along it (fem: mesh.element_length, 0 = d, the particles' resolution of the cohesive
     zone: 2 d put the full DCB's peak 12.7 % above beam theory, d 3.9 %)."""
-    return p["zone.particle_size"] if mode == "coupled" else p["mesh.element_length"] or p["zone.particle_size"]
+    if mode == "coupled":
+        if p["mesh.upper_element_length"]:  # (checked here: every scene's validity asks for the spacing)
+            raise CaseError(f"mesh.upper_element_length = {p['mesh.upper_element_length']:g}: allowed with --mode "
+                            "fem only (coupled arms are meshed on the DEM window's columns); 0 keeps it off")
+        return p["zone.particle_size"]
+    lower = p["mesh.element_length"] or p["zone.particle_size"]
+    return min(lower, p["mesh.upper_element_length"] or lower)  # node to face: the finer arm's nodes bond
 
 
 def specimen(p: dict, mode: str, a0: float, x_a: float, x_b: float, omega_arm: float,
@@ -213,13 +226,17 @@ def cohesive_specimen(p: dict, a0: float, omega_arm: float, stations: tuple[floa
     bond_spacing along, mesh.elements_through through each arm; each node pair stands for its
     tributary length of the plane."""
     h, L = p["geometry.arm_thickness"], p["geometry.length"]
-    d, ex = p["zone.particle_size"], bond_spacing(p, "fem")
+    d = p["zone.particle_size"]
+    ex = p["mesh.element_length"] or d
     if p["material.G13"] >= p["material.E22"]:  # (the same domain as the coupled specimen)
         raise CaseError(f"material.G13 = {p['material.G13']:g}: allowed below material.E22 = {p['material.E22']:g} Pa")
     breaks = np.unique(np.concatenate([[0.0, L], [x for x in stations if 0.0 < x < L]]))
-    xs = np.unique(np.concatenate([np.linspace(a, b, max(1, int(np.ceil((b - a) / ex - 1e-9))) + 1)
-                                   for a, b in zip(breaks[:-1], breaks[1:])]))
+    lines = lambda e: np.unique(np.concatenate([np.linspace(a, b, max(1, int(np.ceil((b - a) / e - 1e-9))) + 1)
+                                                for a, b in zip(breaks[:-1], breaks[1:])]))
+    xs = lines(ex)
     nt = p["mesh.elements_through"]
+    if p["mesh.upper_element_length"]:
+        return _node_to_face_specimen(p, a0, omega_arm, xs, lines(p["mesh.upper_element_length"]))
     ys = np.unique(np.concatenate([np.linspace(0, h, nt + 1), np.linspace(h, 2 * h, nt + 1)]))
     tol = 1e-9 * L
     m = mesh.cut_rectangle(xs, ys, lambda cx, cy: True, crack_y=h, crack_x_max=L)
@@ -239,6 +256,24 @@ def cohesive_specimen(p: dict, a0: float, omega_arm: float, stations: tuple[floa
                     omega_arm=omega_arm, pairs=np.column_stack([lower, upper]), pair_area=np.diff(edges) * d, a0=a0)
 
 
+def _node_to_face_specimen(p: dict, a0: float, omega_arm: float, xs_lower: np.ndarray,
+                           xs_upper: np.ndarray) -> Specimen:
+    """All-FEM with the arms meshed independently (x lines xs_lower, xs_upper m), joined node
+    to face across y = h (fem_region.node_to_face): the finer arm's nodes bond to the other
+    arm's edges, each standing for its tributary length."""
+    h, d, nt = p["geometry.arm_thickness"], p["zone.particle_size"], p["mesh.elements_through"]
+    m, (lower, upper) = mesh.joined(mesh.rectangle(xs_lower, np.linspace(0, h, nt + 1)),
+                                    mesh.rectangle(xs_upper, np.linspace(h, 2 * h, nt + 1)))
+    region = make_region(m, p, slice_ply(p), p["material.rho"], d)
+    face = node_to_face(m.p, m.t, lower, upper, 1, h, 1e-9 * p["geometry.length"])
+    above = np.zeros(region.n_nodes, bool)
+    above[np.unique(m.t[:, upper])] = True
+    end = region.X[:, 0] < 1e-9 * p["geometry.length"]
+    return Specimen(scene=None, bonds=None, t=d, width_factor=p["geometry.width"] / d, region=region,
+                    upper_end=np.flatnonzero(end & above), lower_end=np.flatnonzero(end & ~above),
+                    omega_arm=omega_arm, pair_area=face.area * d, a0=a0, face=face)
+
+
 def simulate(p: dict, mode: str, dem: str, spec: Specimen, supports, alpha: float, t_end: float):
     """(Simulation, FEM participant, the crack plane's LawBonds) of a specimen: coupled (the DEM
     window's bonds on the particles) or fem (the node pairs' bonds: penalty 50 E22 / h, Turon
@@ -250,17 +285,22 @@ def simulate(p: dict, mode: str, dem: str, spec: Specimen, supports, alpha: floa
                                         models=(spec.bonds,))
         return sim, clock.fem, spec.bonds
     dyn = ExplicitDynamics(spec.region, supports=supports, alpha=alpha)
-    pairs, area = spec.pairs, spec.pair_area
-    K = cohesive_penalty(dyn, pairs, area, 50 * p["material.E22"] / p["geometry.arm_thickness"])
-    Z0, R0 = resolved_strengths(p, bond_spacing(p, mode), keys_of(mode))
+    pairs, area, face = spec.pairs, spec.pair_area, spec.face
+    m_pair = None if face is None else face_pair_mass(dyn, face)
+    K = cohesive_penalty(dyn, pairs, area, 50 * p["material.E22"] / p["geometry.arm_thickness"], m_pair)
+    Z0, R0 = resolved_strengths(p, bond_spacing(p, mode), keys_of(mode, p))
     law = HashinCohesiveLaw(K=K, Z0=Z0, R0=R0, GIc=p["interface.GIc"], GIIc=p["interface.GIIc"],
                             eta=p["interface.eta"], mixed_mode=p["interface.mixed_mode"])
-    bonds = cohesive_node_bonds(dyn, pairs, area, law, p["interface.friction"])  # (the step of both together)
-    behind = dyn.region.X[pairs[:, 0], 0] < spec.a0 - 1e-9 * p["geometry.length"]
+    # (the FEM's step is that of the elements and the bonds together)
+    if face is None:
+        bonds = cohesive_node_bonds(dyn, pairs, area, law, p["interface.friction"])
+    else:  # the arms meshed independently: node to face
+        bonds = node_to_face_bonds(dyn, face, area, law, p["interface.friction"])
+    behind = bonds.X[bonds.pairs[:, 0], 0] < spec.a0 - 1e-9 * p["geometry.length"]
     bonds.damage[behind], bonds.t_failed[behind] = 1.0, 0.0  # the initial crack: faces in contact only
     sim = fem_only(dyn, p, t_end, {})
     sim.energies = energies_with(sim.energies, [bonds])
-    sim.counts["interface_bonds"] = len(pairs)
+    sim.counts["interface_bonds"] = len(bonds.pairs)
     return sim, dyn, bonds
 
 
@@ -330,10 +370,13 @@ SCENE_KEYS = {"Z0": "interface.Z0", "R0": "interface.R0", "GIc": "interface.GIc"
               "E22": "material.E22", "N": "interface.cohesive_zone_bonds", "d": "zone.particle_size"}
 
 
-def keys_of(mode: str) -> dict:
+def keys_of(mode: str, p: dict) -> dict:
     """Where a specimen keeps each value in ``mode``: the bonds' spacing is the particles' (coupled)
-    or the FEM's element length (fem)."""
-    return SCENE_KEYS if mode == "coupled" else {**SCENE_KEYS, "d": "mesh.element_length"}
+    or the FEM's element length (fem: the upper arm's when it is the finer, node to face)."""
+    if mode == "coupled":
+        return SCENE_KEYS
+    upper = 0 < p["mesh.upper_element_length"] < (p["mesh.element_length"] or p["zone.particle_size"])
+    return {**SCENE_KEYS, "d": "mesh.upper_element_length" if upper else "mesh.element_length"}
 
 
 def resolved_strengths(p: dict, d: float, keys: dict = SCENE_KEYS) -> tuple[float, float]:

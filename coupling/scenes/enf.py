@@ -114,7 +114,7 @@ def validity(p: dict, mode: str = "coupled", fracture: str = "II", share: float 
     if mode == "coupled":
         dl.check_resolution(p)
     d = dl.bond_spacing(p, mode)
-    return dl.strength_warnings(p, d, dl.keys_of(mode)) + bending_warnings(p, fracture, share, d, dl.keys_of(mode))
+    return dl.strength_warnings(p, d, dl.keys_of(mode, p)) + bending_warnings(p, fracture, share, d, dl.keys_of(mode, p))
 
 
 def bending_specimen(p: dict, mode: str, dem: str, cf: dict, single_leg: bool, warnings: list[str]):
@@ -187,7 +187,7 @@ def evaluate(p: dict, h: dict, mode: str):
     tip, D = np.asarray(h["crack_tip"]), np.asarray(h["interface_dissipated"])
     k = dl.peak_before_growth(P, tip, p["geometry.crack_length"], 1e-3)
     d = dl.bond_spacing(p, mode)
-    Z0, R0 = dl.resolved_strengths(p, d, dl.keys_of(mode))
+    Z0, R0 = dl.resolved_strengths(p, d, dl.keys_of(mode, p))
     qoi = {"Z0_used": Z0, "R0_used": R0, "peak_load": float(P[k]), "deflection_at_peak": float(delta[k]),
            "peak_load_uncorrected_ref": float(cf["P_peak_uncorrected"])}
     qoi["initial_compliance"] = dl.initial_compliance(P, delta, k, 0.5)

@@ -63,7 +63,7 @@ def validity(p: dict, mode: str = "coupled") -> list[str]:
     tolerance)."""
     d = dl.bond_spacing(p, mode)
     return enf.validity(p, mode, "I", LONGEST_ZONE["I"]) + [
-        w for w in enf.bending_warnings(p, "II", LONGEST_ZONE["II"], d, dl.keys_of(mode)) if "longer than" in w]
+        w for w in enf.bending_warnings(p, "II", LONGEST_ZONE["II"], d, dl.keys_of(mode, p)) if "longer than" in w]
 
 
 def build(p: dict, mode: str, dem: str):
@@ -77,7 +77,7 @@ def evaluate(p: dict, h: dict, mode: str):
     a0 = p["geometry.crack_length"]
     k = dl.peak_before_growth(P, tip, a0, 1e-3)
     d = dl.bond_spacing(p, mode)
-    Z0, R0 = dl.resolved_strengths(p, d, dl.keys_of(mode))
+    Z0, R0 = dl.resolved_strengths(p, d, dl.keys_of(mode, p))
     qoi = {"Z0_used": Z0, "R0_used": R0, "peak_load": float(P[k]), "deflection_at_peak": float(delta[k]), "mode_ratio_GII_G": cf["B"]}
     qoi["initial_compliance"] = dl.initial_compliance(P, delta, k, 0.5)
     qoi.update(dl.cohesive_zone_qoi(p, h, k, p["interface.GIIc"], R0, "II", d))
