@@ -30,19 +30,34 @@ from .mesh import interface_areas
 @dataclass
 class NodeToFace:
     """slave (k,): the bonded nodes; nodes (k, f) and weights (k, f): the face nodes of each
-    slave's point and their shape functions there (rows sum to 1); slave_above: the slave side is
-    the upper one (the bonds then run from the point to the node, so their normal points up);
+    slave's point and their shape functions there (rows sum to 1); slave_above (k,) bool: the
+    slave is on the upper side (its bond's normal then points down, from the node to its point);
     area (k,) m^2 (2D: m per unit thickness): the slave's tributary share of the plane."""
 
     slave: np.ndarray
     nodes: np.ndarray
     weights: np.ndarray
-    slave_above: bool
+    slave_above: np.ndarray
     area: np.ndarray
 
     def points(self, X: np.ndarray) -> np.ndarray:
         """(k, d) the points' positions from node positions X (n, d)."""
         return np.einsum("kf,kfd->kd", self.weights, X[self.nodes])
+
+    @classmethod
+    def coincident(cls, pairs: np.ndarray, area: np.ndarray, f: int) -> "NodeToFace":
+        """Doubled nodes (pairs (k, 2) lower / upper) as node-to-face bonds with f face nodes
+        (the upper node at weight 1), to join them with planes meshed apart (concat)."""
+        nodes = np.repeat(pairs[:, 1:2], f, axis=1)
+        weights = np.zeros((len(pairs), f))
+        weights[:, 0] = 1.0
+        return cls(pairs[:, 0].copy(), nodes, weights, np.zeros(len(pairs), bool), np.asarray(area, float))
+
+    @classmethod
+    def concat(cls, parts: list["NodeToFace"]) -> "NodeToFace":
+        """The bonds of several planes as one set (their faces of one node count)."""
+        return cls(*(np.concatenate([getattr(q, k) for q in parts]) for k in
+                     ("slave", "nodes", "weights", "slave_above", "area")))
 
 
 def faces_on_plane(p: np.ndarray, t: np.ndarray, elements: np.ndarray, axis: int, level: float,
@@ -141,4 +156,4 @@ def node_to_face(p: np.ndarray, t: np.ndarray, lower: np.ndarray, upper: np.ndar
     run[upper if above else lower] = 0
     area = interface_areas(p, t, run, [level], axis, tol)[slave]
     nodes, weights = project(p[:, slave].T, p, master_faces, axis)
-    return NodeToFace(slave, nodes, weights, bool(above), area)
+    return NodeToFace(slave, nodes, weights, np.full(len(slave), above), area)

@@ -92,15 +92,17 @@ def test_a_uniform_opening_and_slip_load_each_slave_by_its_area(spec, opening, s
     jump = np.zeros(dim)
     jump[0], jump[dim - 1] = slip, opening
     upper = X[:, dim - 1] > H * (1 + 1e-9) - 1e-12
-    upper[face.slave] = face.slave_above  # the slaves of the plane go with their own block
-    upper |= np.isin(np.arange(len(X)), np.unique(face.nodes)) & (not face.slave_above)
+    above = bool(face.slave_above[0])
+    assert np.all(face.slave_above == above)  # one plane, one slave side
+    upper[face.slave] = above  # the slaves of the plane go with their own block
+    upper |= np.isin(np.arange(len(X)), np.unique(face.nodes)) & (not above)
     dyn.state.u[upper] = jump
     f = node_forces(dyn)
     K = bonds.law.K
     # the plane's area: L (2D, per unit thickness of the slice) or L W
     plane = 4e-3 if dim == 2 else 4e-3 * 3e-3
     assert face.area.sum() == pytest.approx(plane, rel=1e-12)
-    sign = 1.0 if face.slave_above else -1.0  # the slave's jump relative to its point
+    sign = 1.0 if above else -1.0  # the slave's jump relative to its point
     np.testing.assert_allclose(f[face.slave], -sign * K * face.area[:, None] * jump, rtol=1e-9,
                                atol=1e-9 * K * face.area.max() * max(abs(opening), abs(slip), 1e-12))
     np.testing.assert_allclose(f.sum(axis=0), 0.0, atol=1e-9 * K * plane * max(abs(opening), abs(slip), 1e-12))

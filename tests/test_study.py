@@ -526,6 +526,77 @@ def test_the_gmsh_beam_answers_as_the_structured_beam(femdem):
     assert abs(peaks[0] / peaks[1] - 1) < 0.03, peaks
 
 
+def _runs_meshed_apart(path) -> str:
+    """The Gmsh beam (gmsh_beam.geo's half beam, [0_2/90_2]s, plies 0.2 mm) with each ply run
+    meshed on its own, no node shared at the runs' interfaces: the 0 runs 0.4 mm elements across
+    the zone (x < 6 mm) and 12 beyond, graded 1.15; the 90 run 0.545 mm and 9; 1, 2, 1 elements
+    through the runs. Physical groups as the file's ("crossply", "rollers"). Written as Gmsh 4.1
+    by meshio; returns the path."""
+    import meshio
+    from fem_region import mesh as fem_mesh
+    points, quads = [], []
+    for y0, y1, through, across, beyond in ((0.0, 0.4e-3, 1, 15, 12), (0.4e-3, 1.2e-3, 2, 11, 9),
+                                           (1.2e-3, 1.6e-3, 1, 15, 12)):
+        grow = 1.15 ** np.arange(beyond)
+        xs = np.concatenate([np.linspace(0, 6e-3, across + 1), 6e-3 + 14e-3 * np.cumsum(grow) / grow.sum()])
+        m = fem_mesh.rectangle(xs, np.linspace(y0, y1, through + 1))
+        quads.append(m.t.T + sum(len(p) for p in points))
+        points.append(m.p.T)
+    P, Q = np.vstack(points), np.vstack(quads)
+    roller = int(np.argmin(np.hypot(P[:, 0] - 20e-3, P[:, 1])))
+    tags = np.tile([2, 1], (len(P), 1))
+    tags[roller] = [0, 21]
+    meshio.write(path, meshio.Mesh(np.column_stack([P, np.zeros(len(P))]), [("vertex", np.array([[roller]])), ("quad", Q)],
+                                   point_data={"gmsh:dim_tags": tags},
+                                   cell_data={"gmsh:physical": [np.array([2]), np.ones(len(Q), int)],
+                                              "gmsh:geometrical": [np.array([21]), np.ones(len(Q), int)]},
+                                   field_data={"crossply": np.array([1, 2]), "rollers": np.array([2, 0])}),
+                 file_format="gmsh", binary=False)
+    return str(path)
+
+
+COHESIVE = "--set=laminates.crossply.far_field_interfaces=cohesive"
+
+
+@pytest.mark.parametrize("mode, dem", [("fem", None), ("coupled", "liggghts")])
+def test_ply_runs_meshed_apart_are_joined_node_to_face(femdem, tmp_path, mode, dem):
+    """A mesh file whose ply runs are meshed apart (issue #24's non-matching meshes): with a
+    cohesive far field their interfaces are joined node to face, and the beam answers as the
+    same beam meshed with shared nodes (the Gmsh file, doubled there): peak deflection within
+    1.5 %, the ledger closed, every element of the file's right of the zone in the FEM."""
+    apart = _runs_meshed_apart(tmp_path / "apart.msh")
+    peaks = []
+    for sets in ([f"--set=mesh.file={apart}"], []):
+        code, s, err = femdem("run", str(GMSH), "--mode", mode, COHESIVE, *sets, *(["--dem", dem] if dem else []))
+        assert code == 0, err
+        assert_checks(s)
+        peaks.append(s["qoi"]["peak_deflection"])
+    assert abs(peaks[0] / peaks[1] - 1) < 0.015, peaks
+
+
+def test_ply_runs_meshed_apart_delaminate_as_shared_nodes_do(femdem, tmp_path):
+    """Struck at 10 m/s the beam's interfaces soften over half its length (the two 0/90
+    interfaces a near tie, so compared in sum): the damaged length of both together within
+    10 % of the beam meshed with shared nodes, all-FEM."""
+    apart = _runs_meshed_apart(tmp_path / "apart.msh")
+    damaged = []
+    for sets in ([f"--set=mesh.file={apart}"], []):
+        code, s, err = femdem("run", str(GMSH), "--mode", "fem", COHESIVE, "--set=impactors.striker.velocity=10", *sets)
+        assert code == 0, err
+        assert_checks(s)
+        damaged.append(s["qoi"]["damaged_interface_length_0"] + s["qoi"]["damaged_interface_length_1"])
+    assert damaged[1] > 10e-3  # (the reference softens)
+    assert abs(damaged[0] / damaged[1] - 1) < 0.10, damaged
+
+
+def test_ply_runs_meshed_apart_need_a_cohesive_far_field(femdem, tmp_path):
+    """Tied plies need shared nodes: runs meshed apart are refused, naming the key and the
+    planes, before anything is written."""
+    code, s, err = femdem("run", str(GMSH), "--mode", "fem", f"--set=mesh.file={_runs_meshed_apart(tmp_path / 'a.msh')}")
+    assert code == 2 and s is None and err.count("\n") == 1, err
+    assert "far_field_interfaces = 'tied'" in err and "0.0004, 0.0012" in err and "allowed" in err
+
+
 @pytest.mark.parametrize("args, words", [
     (["--mode", "coupled", "--set=zone.half_width=8e-3"], ["mesh.file", "cross x = 0.008", "line"]),
     (["--mode", "fem", "--set=geometry.span=50e-3"], ["mesh.file", "spans x", "allowed"]),

@@ -216,8 +216,9 @@ def node_to_face_bonds(dyn: ExplicitDynamics, face, area: np.ndarray, law, frict
     """LawBonds joining a ply interface meshed independently on its two sides (``face``:
     fem_region.node_to_face.NodeToFace; area (k,) m^2 each slave stands for: face.area, times
     the slice's thickness in 2D): each slave node to its point on the other side's face,
-    evaluated on FaceNodes at each force evaluation; normal +y (2D) or +z (3D), from the lower
-    side. The stable step is that of elements and bonds together, as cohesive_node_bonds: by
+    evaluated on FaceNodes at each force evaluation. Each bond runs from its slave to its point
+    (pairs[:, 0] is a node on the plane), its normal along the laminate's (y in 2D, z in 3D)
+    pointing there: the opening is the two sides' separation either way. The stable step is that of elements and bonds together, as cohesive_node_bonds: by
     Gershgorin, a bond of stiffness k adds 2 k to its slave's row and 2 k w_a to each face node's
     (the coupling vector (1, -w) has |1| + sum w = 2), doubled as there."""
     from physics.law_bonds import LawBonds
@@ -225,9 +226,9 @@ def node_to_face_bonds(dyn: ExplicitDynamics, face, area: np.ndarray, law, frict
     X = np.pad(dyn.region.X, ((0, 0), (0, 3 - dim)))
     X = np.vstack([X, face.points(X)])
     point = n + np.arange(k)
-    pairs = np.column_stack([point, face.slave] if face.slave_above else [face.slave, point])
+    pairs = np.column_stack([face.slave, point])
     normal = np.zeros((k, 3))
-    normal[:, dim - 1] = 1.0
+    normal[:, dim - 1] = np.where(face.slave_above, -1.0, 1.0)
     bonds = LawBonds(pairs, X, normal, area, law, friction=friction, label="interlaminar")
     dyn.node_forces = [FaceNodes(dyn, face).model(bonds, dyn)]
     k_bond = law.K * bonds.area

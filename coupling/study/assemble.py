@@ -26,6 +26,7 @@ from dem_region.particle_impactor import ParticleImpactor
 from dem_region.scene import DemScene
 from fem_region import materials, mesh
 from fem_region.explicit import ExplicitDynamics, PrescribedMotion
+from fem_region.node_to_face import NodeToFace, node_to_face
 from physics.failure import HoffmanStrengths
 from physics.impactor import RigidImpactor
 from physics.law_bonds import LawBonds
@@ -34,7 +35,8 @@ from physics.laws import HashinCohesiveLaw
 from ..params import CaseError
 from ..participants.coupled import coupled_simulation
 from ..participants.dem import dem_only, hold_symmetry_planes
-from ..participants.fem import cohesive_node_bonds, cohesive_penalty, energies_with, fem_only, make_region
+from ..participants.fem import (cohesive_node_bonds, cohesive_penalty, energies_with, face_pair_mass, fem_only,
+                                make_region, node_to_face_bonds)
 from .schema import section
 from .selectors import footprint, tie_particles, whole_spacings
 
@@ -154,6 +156,7 @@ class Built:
     node_bonds: LawBonds | None = None  # a cohesive far field's node-pair bonds
     fem_pairs: np.ndarray | None = None  # (k, 2) the FEM's doubled nodes, lower / upper
     fem_pair_area: np.ndarray | None = None  # (k,) m^2 (per m of slice in 2D) each pair stands for
+    fem_face: NodeToFace | None = None  # runs meshed apart (a mesh file): the pairs node to face, (node, point)
     particles: int = 0  # particles outside a lattice (a panel's windows)
     panel: object = None  # a panel's parts the probes read (study/panel.py)
 
@@ -393,16 +396,48 @@ def _file_region(p: dict, built: Built, x0: float):
 def _split(p: dict, built: Built, m, run: np.ndarray):
     """The mesh with its ply runs' interfaces doubled when the far field is cohesive (the pairs
     in built.fem_pairs, the interface area each stands for in built.fem_pair_area: a share of
-    the faces of the elements below it, per unit slice thickness in 2D), else as it is."""
-    lam = built.lam
-    if p[f"laminates.{p['geometry.laminate']}.far_field_interfaces"] != "cohesive":
-        built.fem_pairs = None
-        return m
+    the faces of the elements below it, per unit slice thickness in 2D), else as it is. A mesh
+    file whose runs are meshed apart at an interface (no node shared there) is joined there node
+    to face (built.fem_face, with the doubled pairs of the other interfaces among its bonds)."""
+    lam, key = built.lam, f"laminates.{p['geometry.laminate']}.far_field_interfaces"
     axis, tol = m.dim() - 1, 1e-9 * lam.ply_thickness
     levels = np.cumsum(lam.plies)[:-1] * lam.ply_thickness
-    P, T, built.fem_pairs = mesh.split_interfaces(m.p, m.t, run, levels, axis, tol)
-    built.fem_pair_area = mesh.interface_areas(P, T, run, levels, axis, tol)[built.fem_pairs[:, 0]]
+    apart = _meshed_apart(m, run, levels, axis, tol)
+    built.fem_pairs, built.fem_face = None, None
+    if p[key] != "cohesive":
+        if apart.any():
+            raise CaseError(f"{key} = {p[key]!r}: the mesh's ply runs are meshed apart at "
+                            f"{'xyz'[axis]} = {', '.join(f'{v:g}' for v in levels[apart])} m (no shared node); "
+                            "allowed: 'cohesive' (joined node to face), or a mesh whose runs share their nodes there")
+        return m
+    joined = np.flatnonzero(~apart)
+    below = np.searchsorted(joined, run)  # the doubled interfaces under each element
+    P, T, pairs = mesh.split_interfaces(m.p, m.t, below, levels[joined], axis, tol)
+    area = mesh.interface_areas(P, T, below, levels[joined], axis, tol)[pairs[:, 0]]
+    if apart.any():
+        faces = [node_to_face(P, T, np.flatnonzero(run <= k), np.flatnonzero(run > k), axis, levels[k], tol)
+                 for k in np.flatnonzero(apart)]
+        built.fem_face = NodeToFace.concat([NodeToFace.coincident(pairs, area, faces[0].nodes.shape[1]), *faces])
+        pairs, area = np.column_stack([built.fem_face.slave, P.shape[1] + np.arange(len(built.fem_face.slave))]), \
+            built.fem_face.area  # (the second of each pair: its point, after the nodes)
+    built.fem_pairs, built.fem_pair_area = pairs, area
     return type(m)(np.ascontiguousarray(P), np.ascontiguousarray(T))
+
+
+def _meshed_apart(m, run: np.ndarray, levels: np.ndarray, axis: int, tol: float) -> np.ndarray:
+    """(len(levels),) bool: the ply runs below and above each interface plane share no node on
+    it (a mesh file may mesh each run apart); CaseError if they share only some."""
+    apart = np.zeros(len(levels), bool)
+    for k, level in enumerate(levels):
+        on = [np.unique(m.t[:, side][np.abs(m.p[axis, m.t[:, side]] - level) < tol])
+              for side in (run <= k, run > k)]
+        shared = np.intersect1d(*on).size
+        if shared and (shared < len(on[0]) or shared < len(on[1])):
+            raise CaseError(f"mesh.file: the ply runs share {shared} of their {len(on[0])} / {len(on[1])} nodes on "
+                            f"the interface {'xyz'[axis]} = {level:g} m; allowed: all of them, or none (meshed apart, "
+                            "joined node to face by a cohesive far field)")
+        apart[k] = shared == 0
+    return apart
 
 
 def _fem_block(p: dict, built: Built, x0: float, reserve: bool = False):
@@ -467,18 +502,21 @@ def _far_field_bonds(p: dict, built: Built, dyn: ExplicitDynamics) -> LawBonds |
     lower: participants.fem.cohesive_penalty), each pair
     standing for its share of the interface (times the slice's thickness in 2D); None with
     tied plies."""
-    pairs = built.fem_pairs
+    pairs, face = built.fem_pairs, built.fem_face
     if pairs is None or len(pairs) == 0:
         return None
     lam, name = built.lam, p[f"laminates.{p['geometry.laminate']}.interface"]
     itf = lam.interface
     area = built.fem_pair_area * (built.t if dyn.region.dim == 2 else 1.0)  # a 2D slice is t thick
     # as stiff as 50 E_y / d, or the elements' limit (the step of both together: dt_el / sqrt 2 at most)
-    K = itf["penalty"] or cohesive_penalty(dyn, pairs, area, 50 * lam.transverse_modulus() / built.t)
+    m_pair = None if face is None else face_pair_mass(dyn, face)
+    K = itf["penalty"] or cohesive_penalty(dyn, pairs, area, 50 * lam.transverse_modulus() / built.t, m_pair)
     try:
         law = HashinCohesiveLaw(K=K, Z0=itf["Z0"], R0=itf["R0"], GIc=itf["GIc"], GIIc=itf["GIIc"])
     except ValueError as exc:
         raise CaseError(f"interfaces.{name}.penalty = {itf['penalty']:g}: {exc}") from None
+    if face is not None:  # runs meshed apart somewhere: every interface's bonds node to face
+        return node_to_face_bonds(dyn, face, area, law, itf["friction"])
     return cohesive_node_bonds(dyn, pairs, area, law, itf["friction"])
 
 
