@@ -18,8 +18,9 @@ class ModelStep:
     built once; a zero row adds nothing); the others only the loaded rows (YADE costs ~1 us per
     particle per call from Python)."""
 
-    def __init__(self, backend, models):
-        self.backend = backend
+    def __init__(self, backend, models, ranks=None):
+        """ranks: a rank_laws.RankLaws that runs the models on this MPI rank's share."""
+        self.backend, self.ranks = backend, ranks
         self.ids = np.unique(np.concatenate([m.ids for m in models])) if models else np.zeros(0, int)
         self._index = np.full(int(self.ids.max()) + 1 if len(self.ids) else 0, -1)
         self._index[self.ids] = np.arange(len(self.ids))
@@ -35,8 +36,11 @@ class ModelStep:
         else:
             self.x[:] = self.backend.positions_of(self.ids)
         self.f[:] = 0.0
-        for model in models:
-            model.apply(self, dt)
+        if self.ranks is not None:
+            self.ranks.apply(self, dt)
+        else:
+            for model in models:
+                model.apply(self, dt)
         if self._bulk:
             self.backend.add_forces(self.ids, self.f)
             return
@@ -81,5 +85,8 @@ def set_model_states(models, states: list[dict]) -> None:
         d = dict(d)
         force = d.pop("mirror_force", None)
         m.restore_state(d)
-        if force is not None:
-            m.force = np.array(force)
+        if force is not None:  # into the array the model holds (a law family's: a view of its slots)
+            if isinstance(getattr(m, "force", None), np.ndarray) and m.force.shape == np.shape(force):
+                m.force[...] = force
+            else:
+                m.force = np.array(force)

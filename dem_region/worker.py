@@ -143,7 +143,7 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
              "model_ids": None, "X_model": None, "F_model": None,
              "models": [], "view": None, "models_dt": 0.0, "in_models": 0.0, "in_interface": 0.0, "ask": False,
              "bell": None, "hooks": 0, "advances": 0, "state_shm": None, "state_views": None, "state_entries": None,
-             "write_states": False,
+             "write_states": False, "ranks": None,
              "go_wait": None, "advance_wait": None}
 
     def between():
@@ -251,10 +251,13 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
                 conn.send(("ok",))
             elif op == "host_models":  # the coupling-layer models run here from now on, on the engine's arrays
                 state["models"] = wire.loads(args[0])
-                state["view"] = ModelStep(backend, state["models"])
+                if comm is not None and comm.Get_size() > 1:  # each rank the bonds of the atoms it owns
+                    from dem_region.rank_laws import RankLaws
+                    state["ranks"] = RankLaws(comm, backend, state["models"])
+                state["view"] = ModelStep(backend, state["models"], state["ranks"])
                 conn.send(("ok",))
             elif op == "models_state":  # into the shared block made to the layout the orchestrator holds
-                states = model_states(state["models"])
+                states = model_states(state["models"]) if state["ranks"] is None else state["ranks"].states()
                 entries, rest = state_block.layout(states)
                 if entries != args[0] or state["state_views"] is None:
                     conn.send(("layout", entries))  # it makes a block to this layout and asks again
@@ -262,6 +265,8 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
                     state_block.write(state["state_views"], entries, states)
                     conn.send(("ok", wire.dumps(rest)))
             elif op == "models_state_block":
+                if not conn.root:  # (rank 0 writes the block)
+                    return True
                 if state["state_shm"] is not None:  # the models' layout changed: the old block goes
                     state["state_views"] = None
                     state["blocks"].remove(state["state_shm"])
@@ -271,8 +276,14 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
                 state["state_views"], state["state_entries"] = state_block.views(shm.buf, args[1]), args[1]
                 conn.send(("ok",))
             elif op == "set_models_state":
-                set_model_states(state["models"], wire.loads(args[0]))
+                if state["ranks"] is None:
+                    set_model_states(state["models"], wire.loads(args[0]))
+                else:
+                    state["ranks"].set_states(wire.loads(args[0]))
                 conn.send(("ok",))
+            elif op == "law_shares":  # bonds each rank evaluates (several ranks; collective)
+                shares = state["ranks"].shares() if state["ranks"] is not None else []
+                conn.send(("ok", comm.allgather(shares) if comm is not None else [shares]))
             elif op == "models_flush":  # the orchestrator queries the engine after the models wrote
                 backend.add_forces(state["model_ids"], state["F_model"])
                 state["F_model"][:] = 0.0

@@ -212,16 +212,18 @@ class LawBonds:
         return d
 
     # -- the fused step (law_kernels) -----------------------------------------------------------
-    def apply(self, target, dt: float) -> None:
+    def apply(self, target, dt: float, between_passes=None) -> None:
         """One step: read the bonded particles' positions, evaluate, add the bond forces. A
         target with particle arrays (``x`` (N, 3) m, ``f`` (N, 3) N, ``rows_of(ids)``: the
         coupling layer's ModelStep, the FEM's nodes) is read and written in place by the fused
-        kernels; any other (positions_of / add_forces) through a copy of its particles."""
+        kernels; any other (positions_of / add_forces) through a copy of its particles.
+        between_passes(self): called between the bonds' pass and the particles' (the slots
+        written, not yet summed: several MPI ranks exchange theirs there, rank_laws)."""
         if hasattr(target, "rows_of"):
             if self._bound is not target:  # bind once: this family's particles as rows of the target's arrays
                 self._rows = np.ascontiguousarray(target.rows_of(self.ids), INDEX)
                 self._end, self._bound = self._rows[self._loc], target
-            self._step(target.x, target.f, self._rows, self._end, dt)
+            self._step(target.x, target.f, self._rows, self._end, dt, between_passes)
             return
         x = np.ascontiguousarray(target.positions_of(self.ids), float)
         f = np.zeros_like(x)
@@ -237,7 +239,7 @@ class LawBonds:
         self._step(x, np.zeros_like(x), np.arange(len(self.ids)), self._loc, dt)
         return self.force
 
-    def _step(self, x, f, rows, end, dt) -> None:
+    def _step(self, x, f, rows, end, dt, between_passes=None) -> None:
         """The two fused passes (law_kernels) on positions x (N, 3) m, adding into f (N, 3) N;
         rows (len(ids),) and end (nb, 2): this family's particles and bond ends as rows of x."""
         if self._plan is None:
@@ -253,11 +255,22 @@ class LawBonds:
             law.m0 if ply else P.none, law.mf if ply else P.none, law.index if ply else P.none,
             law.crushed if ply else P.no,
             float(self.friction), float(self.v_reg), float(dt), self.time,
-            self.damage, self.delta, self.traction, self.t_failed, P.slots)
+            self.damage, self.delta, self.traction, self.t_failed, P.slots, P.active)
         self.work += work
         if snap:
             law.snapback += int(snap)
+        if between_passes is not None:
+            between_passes(self)
         P.gather_pass(P.slots_flat, P.ptr, P.entry, rows, f)
+
+    def evaluate_only(self, mine: np.ndarray) -> None:
+        """Evaluate only the bonds ``mine`` (nb,) bool from now on (one MPI rank's share,
+        dem_region.rank_laws): the others' slots are zeroed, so they add nothing to the
+        forces, and their rows keep what they hold (another rank updates them)."""
+        if self._plan is None:
+            self._plan = _FusedPlan(self)
+        self._plan.active = np.flatnonzero(mine).astype(INDEX)
+        self._plan.slots[~np.asarray(mine, bool)] = 0.0
 
     def softened(self) -> np.ndarray:
         """(nb,) share of each bond's softening branch travelled (0: elastic or not initiated,
@@ -396,6 +409,7 @@ class _FusedPlan:
             raise ValueError(f"{nb} law bonds: past the fused step's 32-bit indices")
         self.slots = np.zeros((nb, S, 3))
         self.slots_flat = self.slots.reshape(nb * S, 3)
+        self.active = np.arange(nb, dtype=INDEX)  # the bonds this process evaluates (LawBonds.evaluate_only)
         bonds.force = self.slots[:, 0]
         m = np.arange(nb)
         part, key = [self.loc[:, 1], self.loc[:, 0]], [(0, 0), (0, 1)]

@@ -43,8 +43,9 @@ FIXED, CENTRAL, FRAME_2D = 0, 1, 2  # kinematics: fixed normal, corotated centra
 def _bonds_pass(x, end, loc, d0, normal, area, Kb,
                kin, X_mid, dir_a, dir_b, dir_e, dir_h, un, s0, L0, axis, local, rot, chord,
                law, hp, pstress, inc_ptr, inc_bond, cell, axes, aligned, ply_axes, scale, hk, Gf, m0, mf, index, crushed,
-               friction, v_reg, dt, time, damage, delta, traction, t_failed, slots):
-    """One step of nb bonds. x (N, 3) m positions; end (nb, 2) rows of the bond ends in x;
+               friction, v_reg, dt, time, damage, delta, traction, t_failed, slots, active):
+    """One step of the bonds ``active`` (indices into nb bonds: all of them, or the share one
+    MPI rank evaluates; the others' rows are left as they are). x (N, 3) m positions; end (nb, 2) rows of the bond ends in x;
     loc (nb, 2) the same ends as rows of the bonds' own particle list (pstress, cell);
     d0 (nb, 3) m reference branch vectors; normal (nb, 3); area (nb,) m^2; Kb (nb,) Pa/m.
     Kinematics ``kin``: FIXED (with ndir = len(dir_a) tangents: neighbour bonds dir_a, dir_b
@@ -93,7 +94,8 @@ def _bonds_pass(x, end, loc, d0, normal, area, Kb,
                 0.5 * (s01 + s10) / v
     work = 0.0
     snapbacks = 0
-    for m in prange(nb):
+    for a_ in prange(active.shape[0]):
+        m = active[a_]
         i, j = end[m, 0], end[m, 1]
         n0, n1, n2 = normal[m, 0], normal[m, 1], normal[m, 2]
         o0, o1, o2 = delta[m, 0], delta[m, 1], delta[m, 2]  # separation and traction of the last step

@@ -2,6 +2,7 @@
 
 Engines are driven through the same contract; where an engine cannot do something yet the
 run must be refused with exit code 2 and a line that says so."""
+import h5py
 import numpy as np
 import pytest
 
@@ -360,6 +361,39 @@ def test_lammps_on_several_ranks_matches_one_rank(femdem):
         assert c1 == 0 and c2 == 0, (e1, e2)
         for k, a in s1["qoi"].items():
             assert s2["qoi"][k] == pytest.approx(a, rel=1e-8, abs=1e-300), (case, k)
+
+
+def test_lammps_ranks_evaluate_the_law_bonds_of_their_atoms(femdem, tmp_path):
+    """On two ranks the law bonds run inside the worker, each rank those whose first particle
+    it owns (issue #20's per-rank laws: both shares nonempty, every bond on one rank), and the
+    run is the one-rank run: the coarse beam struck until its interface bonds fail and it
+    delaminates (interface bonds with their slope terms, ply bonds with their initiation, the
+    impactor), coupled; and the ply specimen broken in tension (ply bonds' initiation across
+    the ranks' edge: each particle's stress from bonds of both ranks), all-DEM. Every qoi and
+    history series within 1e-12 of its scale (the dissipation is the one sum whose order
+    changes: each rank books its own bonds' work)."""
+    for case, sets in (("beam_impact_coarse", ["clock.t_end=1.5e-4"]), ("ply_fracture", [])):
+        args = [a for kv in sets for a in ("--set", kv)]
+        runs = [femdem("run", case, "--dem", "lammps", "--set", f"dem.ranks={n}", *args) for n in (1, 2)]
+        (c1, s1, e1), (c2, s2, e2) = runs
+        assert c1 == 0 and c2 == 0, (e1, e2)
+        shares = s2["counts"]["law_bonds_per_rank"]
+        assert len(shares) == 2 and min(shares) > 0 and sum(shares) == s2["counts"]["law_bonds"], shares
+        assert "law_bonds_per_rank" not in s1["counts"]
+        for k, a in s1["qoi"].items():
+            assert s2["qoi"][k] == pytest.approx(a, rel=1e-12, abs=1e-300), (case, k)
+        n = len(list(tmp_path.glob("run*"))) - 2
+        with h5py.File(tmp_path / f"run{n}" / "history.h5") as h1, h5py.File(tmp_path / f"run{n + 1}" / "history.h5") as h2:
+            H1, H2 = h1["history"], h2["history"]
+            for k in H1:
+                x, y = H1[k][()], H2[k][()]
+                # against the quantity's scale: a ratio's is 1, a momentum component's the largest
+                # component's (the others are round-off themselves)
+                family = [j for j in H1 if j.startswith("momentum_")] if k.startswith("momentum_") else [k]
+                scale = 1.0 if k == "balance_error_rel" else max(max(np.abs(H1[j][()]).max(initial=0.0)
+                                                                     for j in family), 1e-300)
+                assert np.abs(x - y).max(initial=0.0) <= 1e-12 * scale, (case, k)
+    assert s2["qoi"]["failed_bonds"] > 0 and s2["counts"]["particles"] > 0
 
 
 @pytest.mark.slow

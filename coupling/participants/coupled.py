@@ -16,7 +16,7 @@ from ..params import CaseError, Param
 from ..simulation import FieldFrame, Simulation
 from ..timestep import n_steps, time_step
 from .clock import CoupledClock
-from .dem import models_critical_dt, particles_escaped
+from .dem import models_critical_dt, particles_escaped, rank_shares
 from .fem import fem_guards
 
 
@@ -109,7 +109,8 @@ def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, st
         energies=clock.energies,
         counts={"fem_nodes": region.n_nodes, "fem_elements": region.n_elements, "particles": scene.n,
                 "bonds": len(scene.bonds), "interface_particles": len(itf.ids),
-                "law_bonds": sum(len(m.pairs) for m in models if hasattr(m, "pairs"))},
+                "law_bonds": sum(len(m.pairs) for m in models if hasattr(m, "pairs")),
+                **rank_shares(backend, clock.hosted)},
         clock_info={"dt_fem": dt, "dt_dem": dt / m, "dt_stable_fem": dt_fem, "dt_stable_dem": dt_dem, "substeps": m},
         fields=fields, field_frames=p["output.field_frames"], energy_growth_tol=p["guards.energy_growth"],
         close=backend.finalize, versions={dem: backend.version}, timing_correction=clock.timing_correction,

@@ -109,7 +109,8 @@ def dem_only(p: dict, scene: DemScene, dem: str, t_end_default: float,
                       repeat=lambda steps: backend.advance(hook, steps))], dt=dt, n_steps=n,
         history_every=history_every or p["output.history_every"] or max(1, n // 1000), probes={}, energies=energies,
         counts={"fem_nodes": 0, "fem_elements": 0, "particles": scene.n, "bonds": len(scene.bonds),
-                "interface_particles": 0, "law_bonds": sum(len(m.pairs) for m in models if hasattr(m, "pairs"))},
+                "interface_particles": 0, "law_bonds": sum(len(m.pairs) for m in models if hasattr(m, "pairs")),
+                **rank_shares(backend, hosted)},
         clock_info={"dt_fem": 0.0, "dt_dem": dt, "dt_stable_dem": dt_stable, "substeps": 1},
         fields=fields, field_frames=p["output.field_frames"], energy_growth_tol=p["guards.energy_growth"],
         close=backend.finalize, versions={dem: backend.version},
@@ -138,6 +139,14 @@ def _restore(d: dict, driver, models, steps, backend, engine_file, hosted: bool 
     if driver:
         driver.k, driver.work = int(d["driver"]["k"]), float(d["driver"]["work"])
     backend.restore(engine_file)
+
+
+def rank_shares(backend, hosted: bool) -> dict:
+    """{"law_bonds_per_rank": [...]}: the law bonds each MPI rank of an engine's worker
+    evaluates (the models hosted on several ranks, dem_region/rank_laws.py), else {}."""
+    if not hosted or getattr(backend, "ranks", 1) < 2:
+        return {}
+    return {"law_bonds_per_rank": [sum(s) for s in backend.law_shares()]}
 
 
 def worker_seconds(dem) -> dict[str, float]:

@@ -193,6 +193,11 @@ class LammpsBackend(VerletArrays):
     def _after_setup(self) -> None:
         self._views()
 
+    def owned(self) -> np.ndarray:
+        """(k,) the particle ids (0-based) this MPI rank owns now (its local atoms)."""
+        nlocal = int(self.lmp.extract_setting("nlocal"))
+        return np.asarray(self.lmp.numpy.extract_atom("id"))[:nlocal].astype(np.int64) - 1
+
     def atoms_per_rank(self) -> list[int]:
         """Particles each MPI rank owns now (one entry on one rank)."""
         nlocal = int(self.lmp.extract_setting("nlocal"))

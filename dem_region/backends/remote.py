@@ -161,10 +161,10 @@ class RemoteBackend:
         the engine's own arrays, so that their particles never cross the process boundary;
         call before the first start. Only the transition interface then crosses each step;
         the orchestrator keeps ``models`` as copies brought up to date by ``sync_models``.
-        False (the orchestrator evaluates them, as before) on several ranks, where no rank
-        holds every particle, or when a model does not pickle (a load curve given as a
-        closure)."""
-        if self.ranks > 1 or not models:
+        On several ranks each rank evaluates the law bonds of the atoms it owns
+        (dem_region/rank_laws.py). False (the orchestrator evaluates them, as before) when a
+        model does not pickle (a load curve given as a closure)."""
+        if not models:
             return False
         try:
             payload = wire.dumps(list(models))
@@ -207,6 +207,11 @@ class RemoteBackend:
         rest = wire.loads(reply[1])
         set_model_states(models, state_block.read(self._state_views, self._state_entries, rest))
         self._synced = self._evaluations
+
+    def law_shares(self) -> list[list[int]]:
+        """Per MPI rank, the law bonds of each hosted family it evaluates ([] where the
+        orchestrator evaluates them)."""
+        return self._call("law_shares")[1]
 
     def set_models_state(self, states: list[dict]) -> None:
         """The hosted models set to ``states`` (model_states form: a checkpoint restored)."""
