@@ -2,7 +2,7 @@
 
 Usage: .venv/bin/python benchmarks/coupled_step.py [--bonds 1e3 1e4 1e5 1e6] [--steps 20]
            [--repeat 5] [--runs beam_impact_coarse beam_impact] [--dem liggghts yade lammps]
-           [--run-set clock.t_end=2e-4] [--skip-runs] [--skip-kernels] [--handshake]
+           [--run-set clock.t_end=2e-4] [--ranks 1 2] [--skip-runs] [--skip-kernels] [--handshake]
 
 1. Kernels: the 3D quarter beam's lattice (beam_impact_3d: Hoffman ply bonds and Hashin
    interface bonds with two tangents' slope terms), widened and lengthened until each family
@@ -16,7 +16,9 @@ Usage: .venv/bin/python benchmarks/coupled_step.py [--bonds 1e3 1e4 1e5 1e6] [--
 2. Runs: each case coupled on each engine (a fresh process each, --set output to a minimum),
    ms per engine step of each timing bucket of summary.json (dem = the engine's own time,
    models = the coupling layer's laws with their transfer, interface, fem, transport, io,
-   orchestrator), and ns per law bond and step of the models bucket.
+   orchestrator), and ns per law bond and step of the models bucket. LAMMPS on each of --ranks
+   MPI ranks: the law bonds each rank evaluates (those of the atoms it owns); every rank still
+   gathers every atom each step (the worker's arrays are full copies), which the line says.
 """
 from __future__ import annotations
 
@@ -200,7 +202,8 @@ def run_case(case: str, dem: str, sets: list[str]) -> dict:
         s = json.loads((out / "summary.json").read_text())
     steps = s["clock"]["steps"] * max(1, s["clock"].get("substeps", 1))
     law_bonds = s["counts"].get("law_bonds") or 0
-    row = {"case": case, "dem": dem, "wall_s": wall, "engine_steps": steps, "law_bonds": law_bonds}
+    row = {"case": case, "dem": dem, "wall_s": wall, "engine_steps": steps, "law_bonds": law_bonds,
+           "per_rank": s["counts"].get("law_bonds_per_rank")}
     for k, v in s["timing_s"].items():
         row[f"{k}_ms"] = 1e3 * v / steps
     if law_bonds:
@@ -219,6 +222,8 @@ def main():
     ap.add_argument("--dem", nargs="+", default=["liggghts", "yade", "lammps"])
     ap.add_argument("--run-set", action="append", default=[], metavar="KEY=VALUE",
                     help="for the runs, e.g. clock.t_end=2e-4 (ms per step do not need the whole run)")
+    ap.add_argument("--ranks", type=int, nargs="+", default=[1],
+                    help="LAMMPS runs on each of these MPI rank counts (dem.ranks)")
     ap.add_argument("--skip-runs", action="store_true")
     ap.add_argument("--yade-transfer", action="store_true",
                     help="only the paths between numpy and YADE, us per particle (YADE owns this process's OpenMP)")
@@ -252,11 +257,17 @@ def main():
         print("\ncoupled runs, ms per engine step by timing bucket")
         for case in a.runs:
             for dem in a.dem:
-                r = run_case(case, dem, a.run_set)
-                buckets = " ".join(f"{k[:-3]} {v:.3f}" for k, v in r.items() if k.endswith("_ms"))
-                extra = f"; models {r['models_ns_per_bond_step']:.0f} ns/bond-step" if "models_ns_per_bond_step" in r else ""
-                print(f"{case} on {dem}: wall {r['wall_s']:.1f} s, {r['engine_steps']} engine steps, "
-                      f"{r['law_bonds']} law bonds; {buckets}{extra}", flush=True)
+                for ranks in (a.ranks if dem == "lammps" else [1]):
+                    sets = a.run_set + ([f"dem.ranks={ranks}"] if ranks > 1 else [])
+                    r = run_case(case, dem, sets)
+                    buckets = " ".join(f"{k[:-3]} {v:.3f}" for k, v in r.items() if k.endswith("_ms"))
+                    extra = f"; models {r['models_ns_per_bond_step']:.0f} ns/bond-step" if "models_ns_per_bond_step" in r else ""
+                    on = f"{dem} on {ranks} ranks" if ranks > 1 else dem
+                    print(f"{case} on {on}: wall {r['wall_s']:.1f} s, {r['engine_steps']} engine steps, "
+                          f"{r['law_bonds']} law bonds; {buckets}{extra}", flush=True)
+                    if ranks > 1:
+                        print(f"    law bonds per rank {r['per_rank']} (each rank those of the atoms it owns); "
+                              "every rank still gathers every atom's x, v and f each step (full copies)", flush=True)
 
 
 if __name__ == "__main__":
