@@ -87,10 +87,8 @@ class RankLaws:
         """Bonds and particles shared out from the atoms each rank owns now; the counts that are
         summed zeroed on ranks other than 0."""
         laws = [m for m in self.models if isinstance(m, LawBonds)]
-        n = int(max((b.pairs.max() for b in laws if len(b.pairs)), default=-1)) + 1
-        owner = np.full(n, -1, np.int64)
-        mine = np.asarray(self.backend.owned(), np.int64)
-        owner[mine[mine < n]] = self.rank
+        owner = np.full(self.backend.scene.n, -1, np.int64)  # every particle's (impactors' and loads' too)
+        owner[np.asarray(self.backend.owned(), np.int64)] = self.rank
         self.comm.Allreduce(self._in_place, owner, op=self._max)
         if np.any(owner[np.unique(np.concatenate([b.pairs.ravel() for b in laws]))] < 0) if laws else False:
             raise RuntimeError("rank laws: a bonded particle that no rank owns")
