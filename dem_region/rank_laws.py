@@ -60,6 +60,7 @@ class _Family:
             reach_out |= at[t] != owner
         self.slots = np.flatnonzero(reach_out)
         self.slot_buffer = np.zeros((len(self.slots),) + P.slots.shape[1:])
+        self.slot_theirs = np.flatnonzero(owner[self.slots] != rank)  # rows of the buffer other ranks give
         self.stress = np.zeros(0, np.int64)
         if hasattr(bonds.law, "initiate"):
             ends = bonds._loc.ravel()
@@ -70,6 +71,7 @@ class _Family:
             mixed = hi != lo  # particles whose bonds have several owners
             self.stress = np.flatnonzero(mixed[bonds._loc].any(axis=1))
         self.stress_buffer = np.zeros((len(self.stress), 3))
+        self.stress_theirs = np.flatnonzero(owner[self.stress] != rank)
 
 
 class RankLaws:
@@ -111,7 +113,7 @@ class RankLaws:
                 continue
             m.apply(view, dt, self._swap_slots)
             if len(fam.stress):
-                self._swap_rows(m.traction, fam.stress, fam.stress_buffer, fam.owner)
+                self._swap_rows(m.traction, fam.stress, fam.stress_buffer, fam.stress_theirs)
         if self._foreign is None:
             self._foreign = np.flatnonzero(self.particle_owner[view.ids] != self.rank) if len(view.ids) else \
                 np.zeros(0, np.int64)
@@ -121,12 +123,13 @@ class RankLaws:
     def _swap_slots(self, bonds: LawBonds) -> None:
         fam = self.families[id(bonds)]
         if len(fam.slots):
-            self._swap_rows(bonds._plan.slots, fam.slots, fam.slot_buffer, fam.owner)
+            self._swap_rows(bonds._plan.slots, fam.slots, fam.slot_buffer, fam.slot_theirs)
 
-    def _swap_rows(self, a: np.ndarray, rows: np.ndarray, buf: np.ndarray, owner: np.ndarray) -> None:
-        """a[rows] made every rank's: each rank gives the rows of its own bonds, summed."""
+    def _swap_rows(self, a: np.ndarray, rows: np.ndarray, buf: np.ndarray, theirs: np.ndarray) -> None:
+        """a[rows] made every rank's: each rank gives the rows of its own bonds (``theirs``: the
+        buffer's rows of other ranks' bonds, zeroed), summed."""
         np.take(a, rows, axis=0, out=buf)
-        buf[owner[rows] != self.rank] = 0.0
+        buf[theirs] = 0.0
         self.comm.Allreduce(self._in_place, buf, op=self._sum)
         a[rows] = buf
 

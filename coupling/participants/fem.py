@@ -218,9 +218,10 @@ def node_to_face_bonds(dyn: ExplicitDynamics, face, area: np.ndarray, law, frict
     the slice's thickness in 2D): each slave node to its point on the other side's face,
     evaluated on FaceNodes at each force evaluation. Each bond runs from its slave to its point
     (pairs[:, 0] is a node on the plane), its normal along the laminate's (y in 2D, z in 3D)
-    pointing there: the opening is the two sides' separation either way. The stable step is that of elements and bonds together, as cohesive_node_bonds: by
-    Gershgorin, a bond of stiffness k adds 2 k to its slave's row and 2 k w_a to each face node's
-    (the coupling vector (1, -w) has |1| + sum w = 2), doubled as there."""
+    pointing there: the opening is the two sides' separation either way. The stable step is
+    that of elements and bonds together, as cohesive_node_bonds: by Gershgorin, a bond of
+    stiffness k adds 2 k to its slave's row and 2 k w_a to each face node's (the coupling
+    vector (1, -w) has |1| + sum w = 2), doubled as there."""
     from physics.law_bonds import LawBonds
     n, dim, k = dyn.region.n_nodes, dyn.region.dim, len(face.slave)
     X = np.pad(dyn.region.X, ((0, 0), (0, 3 - dim)))
