@@ -185,14 +185,14 @@ class Study:
                     raise CaseError(f"zone.{key}: a zone grown during the run is built for the beams (geometry.shape "
                                     f"= 'beam' or 'beam_3d') so far; allowed for {shape!r}: leave it out")
                 refuse.append(("zone", key))
-        if shape not in ("beam", "block"):
+        if shape not in ("beam", "beam_3d", "block"):
             if given("mesh", "file"):
-                raise CaseError(f"mesh.file: read for geometry.shape = 'beam' or 'block' so far; allowed for "
+                raise CaseError(f"mesh.file: read for geometry.shape = 'beam', 'beam_3d' or 'block' so far; allowed for "
                                 f"{shape!r}: leave it out")
             refuse.append(("mesh", "file"))
         elif given("mesh", "file"):
             for key in ("elements_along", "element_ratio", "elements_per_run") + (("elements_width",) if
-                                                                                  shape == "block" else ()):
+                                                                                  shape != "beam" else ()):
                 if given("mesh", key):
                     raise CaseError(f"mesh.{key}: has no effect with mesh.file; allowed: leave it out")
                 P.pop(f"mesh.{key}", None)

@@ -356,41 +356,49 @@ def _fem_region(p: dict, built: Built, x0: float, reserve: bool = False):
 
 def _file_region(p: dict, built: Built, x0: float):
     """The FEM laminate from a Gmsh file: the elements of its physical group named after the
-    laminate that lie right of x0 (the file needs a mesh line there), each in one ply run (the
-    file needs lines at the runs' interfaces); its physical groups' nodes kept for the supports."""
-    lam, L = built.lam, built.half_span
+    laminate that lie right of x0 (the file needs a mesh line, in 3D a plane, there), each in one
+    ply run (the file needs lines or planes at the runs' interfaces; the runs may be meshed
+    apart there, _split); its physical groups' nodes kept for the supports. A beam slice takes
+    quadrangles or triangles on [x0, L] x [0, H], a 3D beam hexahedra or tetrahedra on
+    [x0, L] x [0, W / 2] x [0, H]."""
+    lam, L, dim = built.lam, built.half_span, built.dim
     try:
         m, built.mesh_groups = mesh.read_gmsh(p["mesh.file"], p["geometry.laminate"])
     except (OSError, ValueError) as exc:
         raise CaseError(f"mesh.file = {p['mesh.file']!r}: {exc}") from None
     tol = 1e-6 * min(lam.ply_thickness, built.t)
     X, where = m.p, f"mesh.file = {p['mesh.file']!r}"
-    if m.dim() != 2:
-        raise CaseError(f"{where}: a beam slice takes a 2D mesh; this one is {m.dim()}D")
+    if m.dim() != dim:
+        raise CaseError(f"{where}: a {'beam slice' if dim == 2 else '3D beam'} takes a {dim}D mesh; this one is "
+                        f"{m.dim()}D")
     x = X[0, m.t]
     if x0 > 0:
         left, right = x.max(axis=0) <= x0 + tol, x.min(axis=0) >= x0 - tol
         if not (left | right).all():
-            raise CaseError(f"{where}: elements cross x = {x0:g} m, the zone's edge; allowed: a mesh with a line "
-                            "there (zone.half_width rounded to whole particle spacings)")
+            raise CaseError(f"{where}: elements cross x = {x0:g} m, the zone's edge; allowed: a mesh with a "
+                            f"{'line' if dim == 2 else 'plane'} there (zone.half_width rounded to whole particle "
+                            "spacings)")
         m = m.remove_elements(np.flatnonzero(left))
         X = m.p
-    span = (X[0].min(), X[0].max(), X[1].min(), X[1].max())
-    want = (x0, L, 0.0, lam.thickness)
-    if any(abs(a - b) > tol for a, b in zip(span, want)):
-        raise CaseError(f"{where}: spans x {span[0]:g}..{span[1]:g}, y {span[2]:g}..{span[3]:g} m; allowed: the "
-                        f"half beam x {want[0]:g}..{want[1]:g} (from the zone's edge in coupled mode), y 0.."
-                        f"{want[3]:g} m")
+    want = [(x0, L)] + ([(0.0, 0.5 * p["geometry.width"])] if dim == 3 else []) + [(0.0, lam.thickness)]
+    span = list(zip(X.min(axis=1), X.max(axis=1)))
+    if any(abs(a - c) > tol or abs(b - e) > tol for (a, b), (c, e) in zip(span, want)):
+        show = lambda box: ", ".join(f"{'xyz'[i]} {a:g}..{b:g}" for i, (a, b) in enumerate(box))
+        raise CaseError(f"{where}: spans {show(span)} m; allowed: the {'half' if dim == 2 else 'quarter'} beam "
+                        f"{show(want)} m (x from the zone's edge in coupled mode)")
     levels = np.cumsum(lam.plies) * lam.ply_thickness
-    y = X[1, m.t]
-    run = np.searchsorted(levels, y.mean(axis=0))
+    z = X[dim - 1, m.t]
+    run = np.searchsorted(levels, z.mean(axis=0))
     bottom = np.concatenate([[0.0], levels])[run]
-    bad = (y.min(axis=0) < bottom - tol) | (y.max(axis=0) > levels[run] + tol)
+    bad = (z.min(axis=0) < bottom - tol) | (z.max(axis=0) > levels[run] + tol)
     if bad.any():
-        raise CaseError(f"{where}: {int(bad.sum())} elements cross a ply run's interface (y = "
-                        f"{', '.join(f'{v:g}' for v in levels[:-1])} m); allowed: a mesh with lines there")
+        raise CaseError(f"{where}: {int(bad.sum())} elements cross a ply run's interface ({'xyz'[dim - 1]} = "
+                        f"{', '.join(f'{v:g}' for v in levels[:-1])} m); allowed: a mesh with "
+                        f"{'lines' if dim == 2 else 'planes'} there")
     m = _split(p, built, m, run)
-    return make_region(m, p, np.array([lam.D(lam.angles[r]) for r in run]), lam.ply["rho"], built.t)
+    if dim == 2:
+        return make_region(m, p, np.array([lam.D(lam.angles[r]) for r in run]), lam.ply["rho"], built.t)
+    return make_region(m, p, np.array([lam.C(lam.angles[r]) for r in run]), lam.ply["rho"], 1.0)
 
 
 def _split(p: dict, built: Built, m, run: np.ndarray):
@@ -442,7 +450,10 @@ def _meshed_apart(m, run: np.ndarray, levels: np.ndarray, axis: int, tol: float)
 
 def _fem_block(p: dict, built: Built, x0: float, reserve: bool = False):
     """Hex8 laminate on [x0, span / 2] x [0, W / 2] x [0, H], one element layer per particle row
-    (or mesh.elements_per_run per ply run); ``reserve``: as _fem_region's."""
+    (or mesh.elements_per_run per ply run; or the mesh.file's part right of x0); ``reserve``:
+    as _fem_region's."""
+    if p["mesh.file"]:
+        return _file_region(p, built, x0)
     lam = built.lam
     m = mesh.box(_along(p, built, x0, reserve),
                  np.linspace(0.0, 0.5 * p["geometry.width"], p["mesh.elements_width"] + 1), _through(p, lam), "hex8")
@@ -459,7 +470,10 @@ def _fem_beam(study, p: dict, built: Built, t_end: float):
     top = X[:, dim - 1] > H - 1e-9 * H
     # the particles' penalty per particle, times a node's share of the surface in particles
     share_x = max(1.0, np.diff(np.unique(X[top, 0])).min() / d)
-    share_y = max(1.0, 0.5 * p["geometry.width"] / p["mesh.elements_width"] / d) if dim == 3 else 1.0
+    share_y = 1.0
+    if dim == 3:  # (a mesh file's: its smallest spacing across the top)
+        wide = np.diff(np.unique(X[top, 1])).min() if p["mesh.file"] else 0.5 * p["geometry.width"] / p["mesh.elements_width"]
+        share_y = max(1.0, wide / d)
     imps = {}
     for name in study.layout.names["impactors"]:
         q = section(p, f"impactors.{name}")

@@ -271,10 +271,13 @@ SECTIONS: dict[str, dict[str, Param]] = {
         "elements_per_ply": Param(1, "a disc's: Hex8 elements through each ply", kind="int", low=1, high=8),
         "file": Param("", "a Gmsh mesh (.msh, read by meshio) of a beam slice's half, x from 0 to span / 2, y "
                       "through the thickness: its physical group named after the laminate is the FEM (quadrangles or "
-                      "triangles, lines at the ply runs' interfaces and at the zone's edge); or of a block's quarter "
+                      "triangles, lines at the ply runs' interfaces and at the zone's edge; the runs may be meshed apart there, "
+                      "joined node to face by a cohesive far field); of a 3D beam's quarter, x from 0 to span / 2, y "
+                      "from 0 to width / 2, z through the thickness (hexahedra or tetrahedra, planes there); or of a "
+                      "block's quarter "
                       "(hexahedra; the group named after its material, elements of one particle cell over the zone's "
                       "square); a physical group named after the [supports.*] table holds that support's nodes; "
-                      "relative to the case file; replaces elements_along, element_ratio (and a block's "
+                      "relative to the case file; replaces elements_along, element_ratio (and a 3D beam's or block's "
                       "elements_width)", kind="str"),
         "element_ratio": Param(6.0, "largest / smallest element length, graded from the zone", low=1.0, high=100.0),
         "elements_per_run": Param(0, "element rows through each run of equal plies (beams); 0: one per particle "
