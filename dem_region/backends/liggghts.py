@@ -31,6 +31,8 @@ from __future__ import annotations
 import ctypes
 import os
 import shutil
+import sys
+from contextlib import contextmanager
 from typing import Callable
 
 import numpy as np
@@ -66,6 +68,10 @@ class LiggghtsBackend(VerletArrays):
             raise NotImplementedError(f"liggghts adapter: {missing} is not available on this engine yet")
         self.scene = scene
         self.tmp = scratch_dir("liggghts")
+        with _std_streams_to(self.tmp / "streams.liggghts"):
+            self._build(scene)
+
+    def _build(self, scene: DemScene) -> None:
         # LIGGGHTS ends the process on an input error: its log (in the scene's temp dir, or on
         # screen with FEMDEM_LIGGGHTS_SCREEN=1) is where the reason is
         argv = [b"liggghts", b"-log", str(self.tmp / "log.liggghts").encode()]
@@ -154,7 +160,8 @@ class LiggghtsBackend(VerletArrays):
 
     # -- stepping ----------------------------------------------------------------------------
     def start(self, between: Callable[[], None] | None = None) -> None:
-        self._cmd("run 0")
+        with _std_streams_to(self.tmp / "streams.liggghts"):
+            self._cmd("run 0")
         self._refresh_store()
         self._hook_phase(between)
 
@@ -195,3 +202,25 @@ class LiggghtsBackend(VerletArrays):
             self.h = None
         if getattr(self, "tmp", None):
             shutil.rmtree(self.tmp, ignore_errors=True)
+
+
+@contextmanager
+def _std_streams_to(path):
+    """The process's stdout and stderr (file descriptors 1, 2) appended to ``path`` meanwhile:
+    a second LIGGGHTS in one process prints its static style tables' "collision" warnings
+    there, whatever -screen says (harmless: the styles are the same)."""
+    libc = ctypes.CDLL(None)
+    sys.stdout.flush()
+    sys.stderr.flush()
+    libc.fflush(None)
+    saved = [os.dup(1), os.dup(2)]
+    try:
+        with open(path, "ab") as f:
+            os.dup2(f.fileno(), 1)
+            os.dup2(f.fileno(), 2)
+        yield
+    finally:
+        libc.fflush(None)  # (C's buffers, filled while the descriptors were the file, go there)
+        for fd, was in zip((1, 2), saved):
+            os.dup2(was, fd)
+            os.close(was)
