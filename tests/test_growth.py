@@ -1,11 +1,14 @@
-"""A zone that grows during the run (issue #25, part 2; coupling/study/growth.py), 2D and 3D beams.
+"""A zone that grows during the run (issue #25, part 2; coupling/study/growth.py), 2D and 3D beams
+and bonded beams.
 
 The coarse seed beam struck at 12 m/s from a 3 mm zone, growing where the far field's Hoffman
 index reaches 0.12 (a low threshold, so that the stress wave converts elements early and
 often): each conversion keeps the momentum to round-off and the beam's mass exactly, the zones
 are whole particle spacings that only grow, the zone's edge never damages, every far-field
 element the criterion flags ends inside the zone, and a run resumed from a checkpoint taken
-after a conversion finishes as the uninterrupted one, bit for bit."""
+after a conversion finishes as the uninterrupted one, bit for bit. The coarse CFRP-strengthened
+concrete beam (seed 5.4) grows from its hand-drawn 3 in zone, whose edge cracks, as its concrete's
+Hoffman index spreads along the span."""
 import h5py
 import numpy as np
 import pytest
@@ -113,6 +116,83 @@ def test_a_run_resumed_after_a_conversion_finishes_as_the_uninterrupted_one(tmp_
 ])
 def test_bad_growth_settings_are_refused(femdem, sets, key):
     code, s, err = femdem("run", "beam_impact_coarse", *_sets(dict(GROW, **sets)))
+    assert code == 2 and key in err and "allowed" in err and s is None
+
+
+CFRP = {"zone.grow": True}
+
+
+def test_a_bonded_beam_s_zone_grows_ahead_of_its_cracks(femdem, tmp_path):
+    """cfrp_beam_impact_coarse (LIGGGHTS): the case's 3 in zone cracks at its edge; grown from it,
+    no damage ever reaches the zone's edge, the conversions keep the momentum to round-off, the
+    zones are whole spacings that only grow, and the peak mid-span deflection is within 1 % of
+    the run with the final zone fixed from t = 0."""
+    code, fixed_small, err = femdem("run", "cfrp_beam_impact_coarse", "--dem", "liggghts")
+    assert code == 0, err
+    assert fixed_small["qoi"]["damage_at_zone_edge"] > 0.5  # (why it must grow)
+    code, s, err = femdem("run", "cfrp_beam_impact_coarse", "--dem", "liggghts", *_sets(CFRP))
+    assert code == 0, err
+    q = s["qoi"]
+    with h5py.File(tmp_path / "run1" / "history.h5") as h:
+        g = h["history"]
+        jumps_P, widths, edge = g["zone.conversion_momentum_jump"][:], g["zone.conversion_half_width"][:], \
+            g["damage_at_zone_edge"][:]
+    d = 3.81e-3
+    assert q["zone_conversions"] >= 1 and np.all(jumps_P < 1e-12)
+    assert np.all(np.diff(np.concatenate([[0.0762], widths])) > 0)
+    assert np.allclose(widths / d, np.round(widths / d), atol=1e-6)
+    assert np.all(edge == 0.0)
+    code, final, err = femdem("run", "cfrp_beam_impact_coarse", "--dem", "liggghts",
+                              f"--set=zone.half_width={q['zone_grown_half_width']}")
+    assert code == 0, err
+    assert final["counts"]["particles"] == s["counts"]["particles"]
+    want = final["qoi"]["peak_midspan_displacement"]
+    assert abs(q["peak_midspan_displacement"] / want - 1) < 0.01
+
+
+@pytest.mark.parametrize("name", ["cfrp_beam_impact_coarse", "cfrp_beam_impact_3d_coarse"])
+def test_a_grown_bonded_beam_holds_its_mass_and_its_bonds_strengths(name):
+    """In process (LIGGGHTS), to the first conversion's aftermath: the far field's nodes and the
+    free particles carry the modelled part's mass exactly (concrete and sheet: (rho_c H + rho_s
+    t_s) L / 2 per unit width, times the slice's thickness d or half the width); each concrete
+    bond the grown zone kept has the strength it had (the scatter is keyed by where a bond is);
+    no far-field element left reaches grow_at."""
+    case = load_case(name, dict(CFRP, **{"clock.t_end": 1.8e-4}))
+    study, p = case.scene, case.parameters
+    sim = study.build(p, "coupled", "liggghts")
+    first = study.growth.built.intra
+    try:
+        run_clock(sim)
+    finally:
+        sim.close()
+    growth = study.growth
+    assert growth.events and all(e[3] < 1e-12 for e in growth.events) and not growth.limit_warning
+    built, clock = growth.built, growth.built.clock
+    bb, d = built.bonded, built.t
+    free = clock.tie.free_particles(built.lattice.n).astype(bool)
+    mass = built.dyn.m.sum() + clock.dem.scene.mass[free].sum()
+    across = d if built.dim == 2 else 0.5 * p["geometry.width"]
+    want = (bb.body["rho"] * bb.depth + bb.sheet["rho"] * bb.ts) * 0.5 * bb.length * across
+    assert mass == pytest.approx(want, rel=1e-12)
+    grown = built.intra
+    key = lambda b: {tuple(np.round(b.X[i] / d, 6)) + tuple(np.round(b.X[j] / d, 6)): k
+                     for k, (i, j) in enumerate(b.pairs)}
+    old, new = key(first), key(grown)
+    common = [(old[k], new[k]) for k in old if k in new]
+    assert len(common) > 0.9 * len(old)
+    i, j = np.array(common).T
+    assert np.array_equal(first.law.strength_scale[i], grown.law.strength_scale[j])
+    hashin, hoffman = growth._indices(built.dyn.region.centroid_strain_stress(clock.u_snapshot)[0])
+    assert max(hashin.max(), hoffman.max()) < p["zone.grow_at"]
+
+
+@pytest.mark.parametrize("sets, key", [
+    ({"zone.grow_to": 0.36}, "zone.grow_to"),
+    ({"zone.grow_to": 0.05}, "zone.grow_to"),
+    ({"coupling.tie": "penalty"}, "coupling.tie"),
+])
+def test_bad_bonded_growth_settings_are_refused(femdem, sets, key):
+    code, s, err = femdem("run", "cfrp_beam_impact_coarse", *_sets(dict(CFRP, **sets)))
     assert code == 2 and key in err and "allowed" in err and s is None
 
 

@@ -166,9 +166,10 @@ class Study:
                 raise CaseError(f"[{table}.{next(iter(names[table]))}]: geometry.shape = {shape!r} takes none")
         if shape in ("beam", "bonded_beam"):
             refuse.append(("mesh", "elements_width"))
+        growing = ("beam", "beam_3d") + BONDED  # a zone grown during the run about x = 0
         if shape not in ("beam", "beam_3d"):  # a zone about x = 0 placed from the estimate: beams'
-            refuse += [("zone", k) for k in ("placement", "grow_at")] + \
-                ([] if shape in ("plate", "block") else [("zone", "margin")])
+            refuse += [("zone", "placement")] + ([] if shape in growing else [("zone", "grow_at")]) + \
+                ([] if shape in ("plate", "block") + growing else [("zone", "margin")])
         footprint = P["zone.shape"].default if "zone.shape" in P else "box"
         if footprint in ("cylinder", "impactor") and shape not in ("plate", "block"):
             raise CaseError(f"zone.shape = {footprint!r}: a plate's or a block's footprint; allowed for {shape!r}: box")
@@ -179,11 +180,12 @@ class Study:
         if shape in ("plate", "block") and len(names["impactors"]) + len(names["loads"]) != 1:
             raise CaseError(f"[impactors.NAME] or [loads.NAME]: a {shape} takes exactly one, on its top face's "
                             f"centre; given {len(names['impactors']) + len(names['loads'])}")
-        if shape not in ("beam", "beam_3d"):  # a zone grown during the run: the beams' so far
+        if shape not in growing:  # a zone grown during the run: the beams' and the bonded beams' so far
             for key in ("grow", "grow_to"):
                 if given("zone", key):
-                    raise CaseError(f"zone.{key}: a zone grown during the run is built for the beams (geometry.shape "
-                                    f"= 'beam' or 'beam_3d') so far; allowed for {shape!r}: leave it out")
+                    raise CaseError(f"zone.{key}: a zone grown during the run is built for the beams and bonded beams "
+                                    f"(geometry.shape = {', '.join(repr(s) for s in growing)}) so far; allowed for "
+                                    f"{shape!r}: leave it out")
                 refuse.append(("zone", key))
         if shape not in ("beam", "beam_3d", "block"):
             if given("mesh", "file"):

@@ -150,6 +150,7 @@ class Built:
     bond_whole: np.ndarray | None = None
     load_probes: dict = field(default_factory=dict)
     particle_loads: list = field(default_factory=list)  # ParticleLoads the models apply (a block's pressure)
+    models: tuple = ()  # the zone's models in the order the simulation runs them (a grown zone's carry over)
     fibre_stiffness: np.ndarray | None = None
     edge_intra: bool = False
     mesh_groups: dict = field(default_factory=dict)  # a mesh file's physical groups: name -> node coordinates
@@ -230,7 +231,7 @@ def beam(study, p: dict, mode: str, dem: str, start=None):
     built.column = lat.index[:, 0] if dim == 3 else lat.column
     built.end_held = mode == "coupled" or clamp
     built.impactors = {name: _particle_impactor(p, name, built) for name in study.layout.names["impactors"]}
-    models = (intra, inter, *built.impactors.values())
+    models = built.models = (intra, inter, *built.impactors.values())
     if mode == "dem":
         sim, backend, _ = dem_only(p, scene, dem, t_end, models=models)
         if not clamp:  # simply supported: the bottom particles of the last column

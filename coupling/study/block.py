@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from dem_region import ply_block
+from dem_region.scatter import strength_scale
 from fem_region import mesh
 from fem_region.explicit import ExplicitDynamics, PrescribedMotion
 from physics.law_bonds import LawBonds
@@ -94,9 +95,9 @@ def block(study, p: dict, mode: str, dem: str):
     else:  # the floor: prescribed below (a clamp on every DOF would be the engine's fixed group)
         held, groups = np.zeros(0, int), {}
     mat_name = p["geometry.material"]
-    rng = np.random.default_rng(p[f"materials.{mat_name}.seed"])
-    lattice.intra_law.strength_scale[:] = 1 + p[f"materials.{mat_name}.strength_scatter"] * rng.uniform(
-        -1, 1, len(lattice.intra_pairs))
+    lattice.intra_law.strength_scale[:] = strength_scale(lattice.x, lattice.intra_pairs, d,
+                                                         p[f"materials.{mat_name}.seed"],
+                                                         p[f"materials.{mat_name}.strength_scatter"])
     l = lattice.x[lattice.intra_pairs[:, 1]] - lattice.x[lattice.intra_pairs[:, 0]]
     intra = LawBonds(lattice.intra_pairs, lattice.x, l, lattice.intra_area, lattice.intra_law, volume=lattice.volume,
                      label="body")

@@ -34,6 +34,7 @@ import numpy as np
 
 from dem_region import ply_block, ply_lattice
 from dem_region.particle_load import ParticleLoad
+from dem_region.scatter import strength_scale
 from dem_region.scene import DemScene
 from fem_region import loads as fem_loads, materials, mesh
 from fem_region.explicit import ExplicitDynamics, PrescribedMotion
@@ -141,8 +142,9 @@ def load_curve(p: dict, name: str):
 
 
 # -- the assembly --------------------------------------------------------------------------------
-def bonded_beam(study, p: dict, mode: str, dem: str):
-    """(Simulation, Built) of a bonded beam (slice or quarter) in ``mode``."""
+def bonded_beam(study, p: dict, mode: str, dem: str, start=None):
+    """(Simulation, Built) of a bonded beam (slice or quarter) in ``mode``; start: the state a
+    coupled run continues from (a grown zone's, coupled_simulation's)."""
     bb = bonded_of(study, p)
     dim = 3 if p["geometry.shape"] == "bonded_beam_3d" else 2
     d, W = bb.d, p["geometry.width"]
@@ -167,6 +169,9 @@ def bonded_beam(study, p: dict, mode: str, dem: str):
                         f"the support ({s - 4 * d:g} m)")
     w = d * round(w / d)
     tied = mode == "coupled"
+    grow = tied and p.get("zone.grow", False)
+    if grow:
+        _check_growth(p, bb, w)
     zone = (_Zone3 if dim == 3 else _Zone2)(bb, p, w, tied)
     load = zone.load(p[f"loads.{load_name}.width"] / 2, curve, width_share)
     models = zone.models + (load,)
@@ -182,11 +187,12 @@ def bonded_beam(study, p: dict, mode: str, dem: str):
         held = support
     else:
         def make(extra_mass):
-            region = _fem_region(p, bb, w, dim)
+            region = _fem_region(p, bb, w, dim, grow_limit(p, bb) if grow else 0.0)
             return ExplicitDynamics(region, supports=_supports(region, bb, dim, symmetry_x=False),
                                     extra_mass=extra_mass)
-        sim, clock = coupled_simulation(p, make, zone.scene, dem, study.t_end, models=models)
+        sim, clock = coupled_simulation(p, make, zone.scene, dem, study.t_end, models=models, start=start)
         backend, built.dyn, built.fem_elements = clock.dem, clock.fem, clock.fem.region.n_elements
+        built.clock = clock
         held = zone.scene.groups["interface"]
     if dim == 3:
         hold_symmetry_planes(backend, zone.column, zone.width_index, held)
@@ -197,6 +203,7 @@ def bonded_beam(study, p: dict, mode: str, dem: str):
     built.backend, built.column = backend, zone.column
     built.lattice = Particles(zone.x, zone.part, d / 2)
     built.intra, built.inter, built.sheet = zone.body, zone.bond, zone.sheet
+    built.models = models
     built.width_index = zone.width_index
     built.bond_whole = zone.bond_whole
     built.end_held, built.edge_intra = tied, True
@@ -241,11 +248,33 @@ def _lines(x0: float, x1: float, h0: float, growth: float, h_max: float) -> list
     return xs + [x1]
 
 
-def _fem_region(p: dict, bb: BondedBeam, x0: float, dim: int):
-    """The FEM half (2D) or quarter (3D) beam on [x0, length / 2] over [-t_sheet, depth]."""
+def grow_limit(p: dict, bb: BondedBeam) -> float:
+    """The farthest a grown zone may reach (m): zone.grow_to, or the last whole particle spacing
+    four spacings short of the support (the zone's own limit)."""
+    return p["zone.grow_to"] or bb.d * np.floor(bb.span / 2 / bb.d - 4 + 1e-9)
+
+
+def _check_growth(p: dict, bb: BondedBeam, w: float) -> None:
+    """A growing zone's keys (as the beams', assemble.beam): a kinematic tie, grow_to whole spacings
+    from the zone's half width to four spacings short of the support; CaseError otherwise."""
+    d, s = bb.d, bb.span / 2
+    if p["coupling.tie"] != "kinematic":
+        raise CaseError(f"coupling.tie = {p['coupling.tie']!r}: a growing zone rebuilds a kinematic tie (its "
+                        "particles' momentum in the FEM's nodes); allowed with zone.grow = true: kinematic")
+    xg = grow_limit(p, bb)
+    if not w <= xg * (1 + 1e-9) or xg > (s - 4 * d) * (1 + 1e-9) or abs(xg / d - round(xg / d)) > 1e-6:
+        raise CaseError(f"zone.grow_to = {p['zone.grow_to']:g}: allowed whole particle spacings ({d:g} m) from the "
+                        f"zone's half width ({w:g} m) to four short of the support ({s - 4 * d:g} m)")
+
+
+def _fem_region(p: dict, bb: BondedBeam, x0: float, dim: int, reserve: float = 0.0):
+    """The FEM half (2D) or quarter (3D) beam on [x0, length / 2] over [-t_sheet, depth];
+    ``reserve`` (m, a zone that may grow to there): columns of d out to it first, so that any
+    grown zone's edge is a mesh line and its far field the same mesh less the converted columns."""
     n, d, ts = bb.rows, bb.d, bb.ts
     L, s = bb.length / 2, bb.span / 2
-    xs = _lines(x0, s, d, p["mesh.growth"], p["mesh.max_size"])
+    cols = list(d * np.arange(int(round(x0 / d)), int(round(reserve / d)))) if reserve > x0 else []
+    xs = cols + _lines(cols[-1] + d if cols else x0, s, d, p["mesh.growth"], p["mesh.max_size"])
     if L - s > 1e-9 * L:  # the overhang beyond the support (none when the span is the length)
         xs += list(np.linspace(s, L, max(2, int(np.ceil((L - s) / p["mesh.max_size"]))) + 1)[1:])
     depth = np.concatenate([[-ts], d * np.arange(1, n + 1)])
@@ -296,8 +325,7 @@ class _Zone2:
                                       moduli={0.0: (Ex, Ey, G)})
         n_col = int(round(x_end / d)) + 1
         lat = ply_lattice.build(0.0, n_col, 0.0, [bb.rows], [0.0], d, mat)
-        rng = np.random.default_rng(c["seed"])
-        lat.intra_law.strength_scale[:] = 1 + c["strength_scatter"] * rng.uniform(-1, 1, len(lat.intra_pairs))
+        lat.intra_law.strength_scale[:] = strength_scale(lat.x, lat.intra_pairs, d, c["seed"], c["strength_scatter"])
         nc = lat.n
         half = (lat.column == 0) | ((lat.column == n_col - 1) & tied)
         both = half[lat.intra_pairs].all(axis=1)
@@ -368,8 +396,7 @@ class _Zone3:
         mat = ply_lattice.PlyMaterial(E, E, G, G, c["rho"], bb.body_strengths(), c["Gf"], c["Gf"])
         half = [(0, 0), (1, 0), (1, M - 1)] + ([(0, N - 1)] if tied else [])
         blk = ply_block.build((0.0, 0.0, 0.0), (N, M), [bb.rows], [0.0], d, mat, half_planes=half)
-        rng = np.random.default_rng(c["seed"])
-        blk.intra_law.strength_scale[:] = 1 + c["strength_scatter"] * rng.uniform(-1, 1, len(blk.intra_pairs))
+        blk.intra_law.strength_scale[:] = strength_scale(blk.x, blk.intra_pairs, d, c["seed"], c["strength_scatter"])
         nc = blk.n
         I, J = (a.ravel() for a in np.meshgrid(np.arange(N), np.arange(M), indexing="ij"))
         cut = np.ones((I.size, 2))

@@ -1,14 +1,17 @@
-"""A damage zone that grows during the run (``zone.grow = true``; the beams, 2D and 3D).
+"""A damage zone that grows during the run (``zone.grow = true``; the beams and the bonded
+beams, 2D and 3D).
 
 At each history sample the far field's failure indices are evaluated on the FEM's
 displacement at that FEM step: Hoffman's ply index when the zone's plies fail, and Hashin's
 interlaminar index when the far-field plies are tied (a cohesive far field delaminates by
-itself), the indices placement uses (study/placement.py). When an element that begins within
+itself), the indices placement uses (study/placement.py); a bonded beam's body by Hoffman and
+its adhesive by Hashin's index on the bottom element row (fields.BondedIndices). When an element that begins within
 ``zone.margin`` of the zone's edge reaches ``zone.grow_at``, or an impactor's contact patch
 (the farthest particle it touches) comes closer than the margin to the edge, the zone grows
 over them and the margin, in whole particle spacings, up to ``zone.grow_to``: the coupled
 model of the grown zone is built, continues from the current state, and the old one is closed.
-The margin (0: the laminate's thickness or four particle sizes) is placement's.
+The margin (0: the laminate's thickness, a bonded beam's depth, or four particle sizes) is
+placement's.
 
 The far field is meshed at the particle spacing out to grow_to (assemble._along), so the grown
 far field is the old mesh less the columns that became particles. What carries over:
@@ -20,7 +23,8 @@ far field is the old mesh less the columns that became particles. What carries o
   functions); their bonds' rest lengths are the lattice's, so they carry the elements'
   strain. An interlaminar bond where the far field had a cohesive node pair takes its softening
   state (the same fraction of the way from onset to decohesion: HashinCohesiveLaw.damage_on).
-- Impactors: their state; the particles they may touch get their last contact state.
+- Impactors and particle loads: their state; the particles they act on get their last
+  contact or load state.
 - Momentum: the converted particles' velocities are shifted by one common vector so that the
   total momentum equals the old model's at that step (to round-off). The energy that changes
   (the elements' strain energy against the bonds', the masses' new distribution) is reported
@@ -40,7 +44,7 @@ from scipy.spatial import cKDTree
 
 from ..params import CaseError
 from ..simulation import energy_scale
-from .fields import FemIndices
+from .fields import BondedIndices, FemIndices
 from .placement import criteria, grown_reach
 
 
@@ -99,10 +103,11 @@ class Growth:
     (each conversion's time, half width, energy and momentum jumps) and the ledger's offsets."""
 
     def __init__(self, study, p: dict, dem: str, built, sim):
-        from .assemble import grow_limit
+        from . import assemble, bonded
         self.study, self.p, self.dem = study, p, dem
-        self.d, self.H = built.t, built.lam.thickness
-        self.limit = grow_limit(p, built)
+        bb = built.bonded
+        self.d, self.H = built.t, built.lam.thickness if bb is None else bb.depth
+        self.limit = assemble.grow_limit(p, built) if bb is None else bonded.grow_limit(p, bb)
         self.margin = p["zone.margin"] or max(4 * self.d, self.H)
         self.grow_at = p["zone.grow_at"]
         self.half_width = float(built.lattice.x[:, 0].max())
@@ -126,16 +131,20 @@ class Growth:
         energies = sim.energies
         sim.energies = lambda: {k: v + self.offset.get(k, 0.0) for k, v in energies().items()}
         region = built.dyn.region
-        self._indices = FemIndices(region, built.lam, built.dim)
-        self._criteria = criteria(self.p, built)
+        if built.bonded is None:
+            self._indices, self._criteria = FemIndices(region, built.lam, built.dim), criteria(self.p, built)
+        else:  # the body's Hoffman, the adhesive's interlaminar index on the bottom row
+            self._indices, self._criteria = BondedIndices(region, built.bonded, built.dim), ["Hoffman", "interlaminar"]
         X = region.X[region.mesh.t.T][:, :, 0]
         self._x0, self._x1 = X.min(axis=1), X.max(axis=1)
 
     def _p(self, half_width: float) -> dict:
         """The parameters of the zone at ``half_width``, at the run's own step and substeps."""
         clock = self.built.clock
-        return dict(self.p, **{"zone.half_width": half_width, "zone.placement": "box", "clock.dt": self.sim.dt,
-                               "clock.substeps": clock.m})
+        q = dict(self.p, **{"zone.half_width": half_width, "clock.dt": self.sim.dt, "clock.substeps": clock.m})
+        if "zone.placement" in q:  # (placed once: the grown zone is a box)
+            q["zone.placement"] = "box"
+        return q
 
     def _assemble(self, half_width: float, start=None, error=CaseError):
         try:
@@ -352,16 +361,15 @@ class _Transfer:
         new[0].last = old[0].last
 
     def _carry_models(self, models, was: np.ndarray, x: np.ndarray) -> None:
-        """Law bonds and impactors (the same families in the same order in both models)."""
-        old_models = (self.old.intra, self.old.inter, *self.old.impactors.values())
-        for new, old in zip(models, old_models):
+        """Law bonds, impactors and particle loads (the same in the same order in both models)."""
+        for new, old in zip(models, self.old.models):
             if hasattr(new, "pairs"):
                 rows = _bond_map(old.pairs, new.pairs, was)
                 _carry_bonds(new, old, rows)
                 if hasattr(new.law, "snapback"):
                     new.law.snapback = old.law.snapback
                 new.work, new.time = old.work, old.time
-                if new is models[1]:
+                if old is self.old.inter:
                     self._inter_from_node_pairs(new, rows)
             else:
                 self._carry_impactor(new, old, was, x)
@@ -388,7 +396,12 @@ class _Transfer:
 
     @staticmethod
     def _carry_impactor(new, old, was: np.ndarray, x: np.ndarray) -> None:
+        """An impactor's or a particle load's state, its rows (x_prev, f_prev: one per particle
+        it acts on) moved to the same particles in the new model."""
         state = old.checkpoint_state()
+        if old._x_prev is None and not hasattr(old, "imp"):  # a load not started: its time and work
+            new.restore_state(state)
+            return
         if old._x_prev is None:  # not started: nothing but its own motion
             new.imp.x, new.imp.v = np.array(state["x"]), np.array(state["v"])
             new.work, new.stored, new.time = old.work, old.stored, old.time
