@@ -186,6 +186,31 @@ def test_a_grown_bonded_beam_holds_its_mass_and_its_bonds_strengths(name):
     assert max(hashin.max(), hoffman.max()) < p["zone.grow_at"]
 
 
+def test_a_bonded_beam_resumed_after_a_conversion_finishes_as_the_uninterrupted_one(tmp_path):
+    """LIGGGHTS in process: a checkpoint taken after the first conversion (158 us), resumed in a
+    new model (the case's 3 in zone rebuilt to the checkpoint's), gives the uninterrupted history
+    to the bit."""
+    from coupling import checkpoint
+    case = load_case("cfrp_beam_impact_coarse", dict(CFRP, **{"clock.t_end": 2.4e-4}))
+    study, p = case.scene, case.parameters
+
+    def run(**kw):
+        sim = study.build(p, "coupled", "liggghts")
+        try:
+            if "run_dir" in kw:  # one checkpoint, at three quarters of the run
+                kw["checkpoint_every"] = 3 * sim.n_steps // 4
+            return run_clock(sim, **kw), study.growth
+        finally:
+            sim.close()
+
+    straight, growth = run(run_dir=tmp_path)
+    ck = checkpoint.latest(tmp_path)
+    assert checkpoint.read(ck)["loop"]["growth"]["half_width"] > p["zone.half_width"]
+    resumed, _ = run(resume_from=ck)
+    for k, v in straight["history"].items():
+        assert np.array_equal(v, resumed["history"][k], equal_nan=True), k
+
+
 @pytest.mark.parametrize("sets, key", [
     ({"zone.grow_to": 0.36}, "zone.grow_to"),
     ({"zone.grow_to": 0.05}, "zone.grow_to"),
