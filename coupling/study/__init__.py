@@ -166,7 +166,7 @@ class Study:
                 raise CaseError(f"[{table}.{next(iter(names[table]))}]: geometry.shape = {shape!r} takes none")
         if shape in ("beam", "bonded_beam"):
             refuse.append(("mesh", "elements_width"))
-        growing = ("beam", "beam_3d") + BONDED  # a zone grown during the run about x = 0
+        growing = ("beam", "beam_3d", "plate") + BONDED  # a zone grown during the run about the centre
         if shape not in ("beam", "beam_3d"):  # a zone about x = 0 placed from the estimate: beams'
             refuse += [("zone", "placement")] + ([] if shape in growing else [("zone", "grow_at")]) + \
                 ([] if shape in ("plate", "block") + growing else [("zone", "margin")])
@@ -180,7 +180,7 @@ class Study:
         if shape in ("plate", "block") and len(names["impactors"]) + len(names["loads"]) != 1:
             raise CaseError(f"[impactors.NAME] or [loads.NAME]: a {shape} takes exactly one, on its top face's "
                             f"centre; given {len(names['impactors']) + len(names['loads'])}")
-        if shape not in growing:  # a zone grown during the run: the beams' and the bonded beams' so far
+        if shape not in growing:  # a zone grown during the run: the beams', bonded beams' and plates' so far
             for key in ("grow", "grow_to"):
                 if given("zone", key):
                     raise CaseError(f"zone.{key}: a zone grown during the run is built for the beams and bonded beams "

@@ -644,18 +644,22 @@ def _particle_impactor(p: dict, name: str, built: Built) -> ParticleImpactor:
 
 
 # -- a plate ------------------------------------------------------------------------------------
-def plate(study, p: dict, mode: str, dem: str):
+def plate(study, p: dict, mode: str, dem: str, start=None):
     """(Simulation, Built) of a quarter of a rectangular laminated plate (symmetry planes x = 0
     and y = 0, the thickness along z) under an impactor (a sphere or a flat-faced rod) or a
     pressure history on a disc (study/pressure.py) at its centre, supported at its edges; the
-    zone a column through the thickness whose footprint zone.shape selects (study/selectors.py)."""
+    zone a column through the thickness whose footprint zone.shape selects (study/selectors.py);
+    start: the state a coupled run continues from (a grown zone's, coupled_simulation's)."""
     built = body_of(p, mode)
     d, t_end = built.t, study.t_end
     a2, b2 = 0.5 * p["geometry.span"], 0.5 * p["geometry.width"]
     whole_spacings(p, d)
     from .bonded import load_curve
     from .pressure import fem_pressure, particle_pressure  # (they import the disc, which imports this)
-    fp = footprint(study, p, built)
+    grow = mode == "coupled" and p.get("zone.grow", False)
+    fp = footprint(study, p, built, cell_wise=grow)
+    if grow:
+        _check_plate_growth(p, built, fp)
     clamp = _support(study, p) == "clamped"
     names, loads = list(study.layout.names["impactors"]), list(study.layout.names["loads"])
     curve = load_curve(p, loads[0]) if loads else None
@@ -706,14 +710,16 @@ def plate(study, p: dict, mode: str, dem: str):
             backend.set_velocities(bottom, np.zeros((len(bottom), 3)))
     else:
         def make(extra_mass):
-            region = _fem_plate(p, built, fp, hole=True)
+            region = _fem_plate(p, built, fp, hole=True, reserve=plate_grow_limit(p, built) if grow else 0.0)
             dyn = ExplicitDynamics(region, supports=_plate_supports(region, built, clamp, symmetry=True),
                                    extra_mass=extra_mass, loads=fem_pressure(p, loads, region, H, curve))
             built.node_bonds = _far_field_bonds(p, built, dyn)
             return dyn
-        sim, clock = coupled_simulation(p, make, scene, dem, t_end, models=models)
+        sim, clock = coupled_simulation(p, make, scene, dem, t_end, models=models, start=start)
         backend, built.dyn, built.fem_elements = clock.dem, clock.fem, clock.fem.region.n_elements
+        built.clock = clock
         _with_far_field(sim, built)
+    built.models = models
     built.backend = backend
     held = np.concatenate([scene.groups.get("interface", []), scene.groups.get("fixed", [])]).astype(int)
     hold_symmetry_planes(backend, i, j, held)
@@ -727,16 +733,56 @@ def _plate_axis(w: float, half: float, n_zone: int, n: int, ratio: float) -> np.
     return np.concatenate([np.linspace(0.0, w, n_zone + 1)[:-1], mesh.graded(w, half, n, ratio, w)])
 
 
-def _fem_plate(p: dict, built: Built, fp, hole: bool):
+def plate_grow_limit(p: dict, built: Built) -> float:
+    """The farthest a plate's grown zone may reach (m): zone.grow_to, or the last whole particle
+    spacing below 0.8 x the smaller half side (a zone's limit)."""
+    d, half = built.t, 0.5 * min(p["geometry.span"], p["geometry.width"])
+    return p["zone.grow_to"] or (np.ceil(0.8 * half / d - 1e-9) - 1) * d
+
+
+def _check_plate_growth(p: dict, built: Built, fp) -> None:
+    """A plate's growing zone: a box footprint (its edge a mesh line at any width), a kinematic
+    tie, grow_to whole spacings from the zone's half width to below 0.8 x the smaller half side;
+    CaseError otherwise."""
+    d, half = built.t, 0.5 * min(p["geometry.span"], p["geometry.width"])
+    if p["zone.shape"] != "box":
+        raise CaseError(f"zone.shape = {p['zone.shape']!r}: a plate's zone grows as a box (zone.grow = true); "
+                        "allowed: box")
+    if p["coupling.tie"] != "kinematic":
+        raise CaseError(f"coupling.tie = {p['coupling.tie']!r}: a growing zone rebuilds a kinematic tie (its "
+                        "particles' momentum in the FEM's nodes); allowed with zone.grow = true: kinematic")
+    xg = plate_grow_limit(p, built)
+    if not fp.w <= xg * (1 + 1e-9) or not xg < 0.8 * half or abs(xg / d - round(xg / d)) > 1e-6:
+        raise CaseError(f"zone.grow_to = {p['zone.grow_to']:g}: allowed whole particle spacings ({d:g} m) from "
+                        f"the zone's half width ({fp.w:g} m) to below 0.8 x the smaller half side ({0.8 * half:g} m)")
+
+
+def _reserved_axis(xg: float, half: float, d: float, n: int, ratio: float) -> np.ndarray:
+    """Node coordinates on [0, half] for a zone that may grow to xg: elements of one particle
+    spacing d out to xg (any grown zone's edge a mesh line), then graded to the edge from elements
+    no shorter than d (the stable step stays the particle-sized elements'), the most of n that
+    allows it."""
+    for k in range(n, 0, -1):
+        rest = mesh.graded(xg, half, k, ratio ** (1.0 / max(k - 1, 1)), xg)
+        if rest[1] - rest[0] >= d * (1 - 1e-9) or k == 1:
+            break
+    return np.concatenate([np.arange(int(round(xg / d))) * d, rest])
+
+
+def _fem_plate(p: dict, built: Built, fp, hole: bool, reserve: float = 0.0):
     """Hex8 laminate on the quarter plate, one element layer per particle row, mesh.elements_width
     equal elements over the zone's square; with ``hole`` the zone's elements (those whose centre
-    its footprint holds) left out (the FEM around the particles)."""
+    its footprint holds) left out (the FEM around the particles); ``reserve`` (m, a zone that may
+    grow to there): elements of one particle cell out to it (_reserved_axis)."""
     lam, k, w = built.lam, p["zone.plies_per_particle"], fp.w
     n, nz = p["mesh.elements_along"], fp.n
     ratio = p["mesh.element_ratio"] ** (1.0 / max(n - 1, 1))
-    m = mesh.box(_plate_axis(w, 0.5 * p["geometry.span"], nz, n, ratio),
-                 _plate_axis(w, 0.5 * p["geometry.width"], nz, n, ratio),
-                 np.linspace(0.0, lam.thickness, sum(lam.plies) // k + 1), "hex8")
+    if reserve:
+        axes = [_reserved_axis(reserve, 0.5 * p[key], built.t, n, p["mesh.element_ratio"])
+                for key in ("geometry.span", "geometry.width")]
+    else:
+        axes = [_plate_axis(w, 0.5 * p[key], nz, n, ratio) for key in ("geometry.span", "geometry.width")]
+    m = mesh.box(*axes, np.linspace(0.0, lam.thickness, sum(lam.plies) // k + 1), "hex8")
     centre = m.p[:, m.t].mean(axis=1)
     if hole:
         m = m.remove_elements(np.flatnonzero(fp.inside(centre[0], centre[1])))

@@ -1,5 +1,5 @@
 """A damage zone that grows during the run (``zone.grow = true``; the beams and the bonded
-beams, 2D and 3D).
+beams, 2D and 3D, and the plates' box zones).
 
 At each history sample the far field's failure indices are evaluated on the FEM's
 displacement at that FEM step: Hoffman's ply index when the zone's plies fail, and Hashin's
@@ -8,7 +8,8 @@ itself), the indices placement uses (study/placement.py); a bonded beam's body b
 its adhesive by Hashin's index on the bottom element row (fields.BondedIndices). When an element that begins within
 ``zone.margin`` of the zone's edge reaches ``zone.grow_at``, or an impactor's contact patch
 (the farthest particle it touches) comes closer than the margin to the edge, the zone grows
-over them and the margin, in whole particle spacings, up to ``zone.grow_to``: the coupled
+over them and the margin, in whole particle spacings, up to ``zone.grow_to`` (a plate's box:
+the distance from the centre is max(|x|, |y|), so the square grows over them): the coupled
 model of the grown zone is built, continues from the current state, and the old one is closed.
 The margin (0: the laminate's thickness, a bonded beam's depth, or four particle sizes) is
 placement's.
@@ -107,7 +108,9 @@ class Growth:
         self.study, self.p, self.dem = study, p, dem
         bb = built.bonded
         self.d, self.H = built.t, built.lam.thickness if bb is None else bb.depth
-        self.limit = assemble.grow_limit(p, built) if bb is None else bonded.grow_limit(p, bb)
+        self.plane = p["geometry.shape"] == "plate"  # a square zone about the centre, not a strip along x
+        self.limit = bonded.grow_limit(p, bb) if bb is not None else \
+            assemble.plate_grow_limit(p, built) if self.plane else assemble.grow_limit(p, built)
         self.margin = p["zone.margin"] or max(4 * self.d, self.H)
         self.grow_at = p["zone.grow_at"]
         self.half_width = float(built.lattice.x[:, 0].max())
@@ -135,8 +138,11 @@ class Growth:
             self._indices, self._criteria = FemIndices(region, built.lam, built.dim), criteria(self.p, built)
         else:  # the body's Hoffman, the adhesive's interlaminar index on the bottom row
             self._indices, self._criteria = BondedIndices(region, built.bonded, built.dim), ["Hoffman", "interlaminar"]
-        X = region.X[region.mesh.t.T][:, :, 0]
-        self._x0, self._x1 = X.min(axis=1), X.max(axis=1)
+        X = region.X[region.mesh.t.T]  # (nel, nodes, dim)
+        # each element's nearest and farthest distance from the centre: along x, or max(x, y) (a square)
+        self._x0, self._x1 = X[:, :, 0].min(axis=1), X[:, :, 0].max(axis=1)
+        if self.plane:
+            self._x0, self._x1 = np.maximum(self._x0, X[:, :, 1].min(axis=1)), np.maximum(self._x1, X[:, :, 1].max(axis=1))
 
     def _p(self, half_width: float) -> dict:
         """The parameters of the zone at ``half_width``, at the run's own step and substeps."""
@@ -166,7 +172,7 @@ class Growth:
                 r = r - np.outer(r @ a, a) / (a @ a)
             touching = np.linalg.norm(r, axis=1) < m.imp.radius
             if m.imp.shape in ("sphere", "cylinder") and touching.any():
-                reach = max(reach, float(np.abs(x[touching, 0]).max()))
+                reach = max(reach, float(np.abs(x[touching, : 2 if self.plane else 1]).max()))
         return reach
 
     def __call__(self, step: int):

@@ -72,13 +72,14 @@ def whole_spacings(p: dict, d: float) -> None:
                             f"allowed e.g. {2 * max(1, round(m)) * d:g} m")
 
 
-def footprint(study, p: dict, built) -> Footprint:
+def footprint(study, p: dict, built, cell_wise: bool = False) -> Footprint:
     """The zone's footprint from zone.shape and its keys; CaseError (one line) when it does not
-    fit the plate or does not hold the impactor's face."""
+    fit the plate or does not hold the impactor's face. cell_wise: the FEM's elements over the
+    zone's square are its particle cells (a zone that may grow)."""
     d, shape = built.t, p["zone.shape"]
     # a mesh file's elements are matched to the particle cells one by one (its own check); the
     # structured FEM has mesh.elements_width elements of whole cells over the zone's square
-    cell_wise = bool(p.get("mesh.file"))
+    cell_wise = cell_wise or bool(p.get("mesh.file"))
     n = 1 if cell_wise else p["mesh.elements_width"]
     half_side = 0.5 * min(p["geometry.span"], p["geometry.width"])
     key = "zone.margin" if shape == "impactor" else "zone.half_width"
