@@ -31,14 +31,17 @@ COUPLING: dict[str, Param] = {
 
 def coupled_simulation(p: dict, make_fem: Callable[[np.ndarray | None], ExplicitDynamics], scene: DemScene,
                        dem: str, t_end_default: float, history_every: int = 0, steps: int = 0, models: tuple = (),
-                       start: Callable | None = None):
+                       start: Callable | None = None, hold: Callable | None = None):
     """(Simulation, CoupledClock) for a FEM far field made by ``make_fem(None)`` and a
     DEM ``scene`` whose group "interface" is slaved to the FEM. steps: FEM steps (default
     from t_end); history_every: FEM steps between samples (default from output.history_every);
     start: a state to continue from (a grown zone's, coupling/study/growth.py), called as
     start(fem, scene, interface, models) once both participants exist and before the engine
     is built; it sets the FEM's and the models' state and returns the scene the engine starts
-    from (the particles' current positions and velocities; ``scene`` keeps the reference ones)."""
+    from (the particles' current positions and velocities; ``scene`` keeps the reference ones);
+    hold: called with the engine once it is built and tied, before it starts (a quarter's
+    symmetry planes: held from its first evaluation, which a grown zone's model makes with the
+    particles in motion)."""
     fem = make_fem(None)  # built once; the tie's node masses are added below
     try:
         itf = TransitionInterface.build(fem.region, scene.x, scene.groups.get("interface", np.zeros(0, int)))
@@ -56,7 +59,8 @@ def coupled_simulation(p: dict, make_fem: Callable[[np.ndarray | None], Explicit
     except EngineUnavailable as exc:
         raise CaseError(str(exc)) from None
     try:
-        return _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, steps, models, engine_scene)
+        return _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, steps, models, engine_scene,
+                         hold)
     except NotImplementedError as exc:
         backend.finalize()
         raise CaseError(f"--dem {dem}: {exc}") from None
@@ -65,7 +69,7 @@ def coupled_simulation(p: dict, make_fem: Callable[[np.ndarray | None], Explicit
         raise
 
 
-def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, steps, models, engine_scene):
+def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, steps, models, engine_scene, hold):
     backend.build(engine_scene)
     if p["coupling.tie"] == "kinematic":
         tie = KinematicTie(itf, backend, scene.mass)
@@ -73,6 +77,8 @@ def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, st
         if not hasattr(backend, "add_forces"):
             raise NotImplementedError("the penalty tie needs added particle forces, not available on this engine yet")
         tie = PenaltyTie(itf, backend, scene.mass, p["coupling.tie_penalty"] or 4 * float(scene.kn.max()))
+    if hold is not None:
+        hold(backend)
     dt_fem, dt_dem = fem.critical_dt(), min(backend.critical_dt(), tie.critical_dt(fem.m),
                                             models_critical_dt(models, scene))
     # 0 = automatic: as many substeps as the FEM step allows (with the interface band's

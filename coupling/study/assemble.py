@@ -232,6 +232,16 @@ def beam(study, p: dict, mode: str, dem: str, start=None):
     built.end_held = mode == "coupled" or clamp
     built.impactors = {name: _particle_impactor(p, name, built) for name in study.layout.names["impactors"]}
     models = built.models = (intra, inter, *built.impactors.values())
+
+    def hold(backend) -> None:  # the symmetry planes
+        if dim == 3:
+            held = np.concatenate([scene.groups.get("interface", []), scene.groups.get("fixed", [])]).astype(int)
+            hold_symmetry_planes(backend, lat.index[:, 0], lat.index[:, 1], held)
+        else:
+            axis = np.flatnonzero(lat.column == 0)
+            backend.prescribe(axis, "x")
+            backend.set_velocities(axis, np.zeros((len(axis), 3)))
+
     if mode == "dem":
         sim, backend, _ = dem_only(p, scene, dem, t_end, models=models)
         if not clamp:  # simply supported: the bottom particles of the last column
@@ -239,6 +249,7 @@ def beam(study, p: dict, mode: str, dem: str, start=None):
             bottom = last[lat.x[last, dim - 1] <= lat.x[last, dim - 1].min() + 1e-9 * t]
             backend.prescribe(bottom, "yz"[dim - 2])
             backend.set_velocities(bottom, np.zeros((len(bottom), 3)))
+        hold(backend)
     else:
         def make(extra_mass):
             x0 = lat.x[:, 0].max()
@@ -248,18 +259,11 @@ def beam(study, p: dict, mode: str, dem: str, start=None):
                                                                   groups=built.mesh_groups), extra_mass=extra_mass)
             built.node_bonds = _far_field_bonds(p, built, dyn)
             return dyn
-        sim, clock = coupled_simulation(p, make, scene, dem, t_end, models=models, start=start)
+        sim, clock = coupled_simulation(p, make, scene, dem, t_end, models=models, start=start, hold=hold)
         backend, built.dyn, built.clock = clock.dem, clock.fem, clock
         built.fem_elements = clock.fem.region.n_elements
         _with_far_field(sim, built)
     built.backend = backend
-    if dim == 3:
-        held = np.concatenate([scene.groups.get("interface", []), scene.groups.get("fixed", [])]).astype(int)
-        hold_symmetry_planes(backend, lat.index[:, 0], lat.index[:, 1], held)
-    else:
-        axis = np.flatnonzero(lat.column == 0)
-        backend.prescribe(axis, "x")  # the symmetry plane
-        backend.set_velocities(axis, np.zeros((len(axis), 3)))
     sim.counts.update({"law_bonds": len(intra.pairs) + len(inter.pairs)})
     return sim, built
 
@@ -702,12 +706,18 @@ def plate(study, p: dict, mode: str, dem: str, start=None):
         models += (load,)
         built.particle_loads = [load]
         built.load_probes = {loads[0]: lambda: float(curve(load.time))}
+    held = np.concatenate([scene.groups.get("interface", []), scene.groups.get("fixed", [])]).astype(int)
+
+    def hold(backend) -> None:  # the symmetry planes
+        hold_symmetry_planes(backend, i, j, held)
+
     if mode == "dem":
         sim, backend, _ = dem_only(p, scene, dem, t_end, models=models)
         if not clamp:  # simply supported: the bottom particles of the edges, vertically
             bottom = edge[block.index[edge, 2] == 0]
             backend.prescribe(bottom, "z")
             backend.set_velocities(bottom, np.zeros((len(bottom), 3)))
+        hold(backend)
     else:
         def make(extra_mass):
             region = _fem_plate(p, built, fp, hole=True, reserve=plate_grow_limit(p, built) if grow else 0.0)
@@ -715,14 +725,12 @@ def plate(study, p: dict, mode: str, dem: str, start=None):
                                    extra_mass=extra_mass, loads=fem_pressure(p, loads, region, H, curve))
             built.node_bonds = _far_field_bonds(p, built, dyn)
             return dyn
-        sim, clock = coupled_simulation(p, make, scene, dem, t_end, models=models, start=start)
+        sim, clock = coupled_simulation(p, make, scene, dem, t_end, models=models, start=start, hold=hold)
         backend, built.dyn, built.fem_elements = clock.dem, clock.fem, clock.fem.region.n_elements
         built.clock = clock
         _with_far_field(sim, built)
     built.models = models
     built.backend = backend
-    held = np.concatenate([scene.groups.get("interface", []), scene.groups.get("fixed", [])]).astype(int)
-    hold_symmetry_planes(backend, i, j, held)
     sim.counts.update({"law_bonds": len(intra.pairs) + len(inter.pairs)})
     return sim, built
 

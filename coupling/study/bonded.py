@@ -184,22 +184,16 @@ def bonded_beam(study, p: dict, mode: str, dem: str, start=None):
         support = np.flatnonzero((zone.column == c) & (zone.x[:, up] < d))
         backend.prescribe(support, "yz"[up - 1])
         backend.set_velocities(support, np.zeros((len(support), 3)))
-        held = support
+        _hold(backend, zone, support, dim)
     else:
         def make(extra_mass):
             region = _fem_region(p, bb, w, dim, grow_limit(p, bb) if grow else 0.0)
             return ExplicitDynamics(region, supports=_supports(region, bb, dim, symmetry_x=False),
                                     extra_mass=extra_mass)
-        sim, clock = coupled_simulation(p, make, zone.scene, dem, study.t_end, models=models, start=start)
+        sim, clock = coupled_simulation(p, make, zone.scene, dem, study.t_end, models=models, start=start,
+                                        hold=lambda backend: _hold(backend, zone, zone.scene.groups["interface"], dim))
         backend, built.dyn, built.fem_elements = clock.dem, clock.fem, clock.fem.region.n_elements
         built.clock = clock
-        held = zone.scene.groups["interface"]
-    if dim == 3:
-        hold_symmetry_planes(backend, zone.column, zone.width_index, held)
-    else:
-        axis = np.flatnonzero(zone.column == 0)
-        backend.prescribe(axis, "x")  # the symmetry plane
-        backend.set_velocities(axis, np.zeros((len(axis), 3)))
     built.backend, built.column = backend, zone.column
     built.lattice = Particles(zone.x, zone.part, d / 2)
     built.intra, built.inter, built.sheet = zone.body, zone.bond, zone.sheet
@@ -212,6 +206,17 @@ def bonded_beam(study, p: dict, mode: str, dem: str, start=None):
     built.load_probes = {load_name: whole}
     sim.counts.update({"law_bonds": sum(len(b.pairs) for b in zone.models)})
     return sim, built
+
+
+def _hold(backend, zone, held: np.ndarray, dim: int) -> None:
+    """The symmetry planes (x = 0; in 3D also mid-width y = 0), but for the particles ``held``
+    already (tie, support)."""
+    if dim == 3:
+        hold_symmetry_planes(backend, zone.column, zone.width_index, held)
+    else:
+        axis = np.flatnonzero(zone.column == 0)
+        backend.prescribe(axis, "x")
+        backend.set_velocities(axis, np.zeros((len(axis), 3)))
 
 
 def _fem_beam(study, p: dict, bb: BondedBeam, built: Built, curve, load_name: str):
