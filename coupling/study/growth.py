@@ -336,6 +336,10 @@ class _Transfer:
         dim = self.region.dim
         x[ids, :dim] = scene.x[ids, :dim] + W @ self.u
         v[ids, :dim] = W @ self.v
+        # the symmetry planes (x = 0; in 3D also y = 0) hold their normal component from the
+        # engine's start (coupled_simulation's hold): none there, and none given there below
+        on_plane = np.abs(scene.x[:, : dim - 1]) < tol  # (n, planes)
+        v[:, : dim - 1][on_plane] = 0.0
         self._carry_models(models, was, x)
         # momentum: the converted (now free) particles take up what the new split of the mass changed
         free = np.ones(scene.n, bool)
@@ -343,11 +347,11 @@ class _Transfer:
         P = np.zeros(3)
         P[:dim] = fem.m @ s.v
         P += scene.mass[free] @ v[free] + sum((m.momentum() for m in models), np.zeros(3))
-        shifted = converted & free
-        if shifted.any():
-            dv = (self.momentum - P) / scene.mass[shifted].sum()
-            dv[dim:] = 0.0
-            v[shifted] += dv
+        held = np.column_stack([on_plane, np.zeros(scene.n, bool)])  # (n, dim): the planes' normals
+        for c in range(dim):  # per component, over the particles free in it
+            shifted = converted & free & ~held[:, c]
+            if shifted.any():
+                v[shifted, c] += (self.momentum[c] - P[c]) / scene.mass[shifted].sum()
         self.engine_start = (x, v)
         return replace(scene, x=x, velocity=v)
 
