@@ -279,7 +279,7 @@ def test_a_plate_s_square_zone_grows_keeping_momentum_and_mass():
 def test_a_plate_grown_answers_as_its_final_zone_fixed(femdem):
     """Grown from 2.5 mm, the plate's peak deflection within 3 % of its final zone fixed from t = 0
     on the same far-field mesh (grow_at 2: no element grows it); measured 2.1 % (docs/status.md:
-    the conversion's energy jump on this plate is 1.4e-2, and the run warns)."""
+    the conversion's energy jump on this plate is 3.9e-3)."""
     code, s, err = femdem("run", str(_plate()), "--dem", "liggghts", *_sets(PLATE))
     assert code == 0, err
     q = s["qoi"]
@@ -351,8 +351,10 @@ def test_a_zone_grows_anywhere_in_the_beam_s_ranges_on_every_engine(femdem, tmp_
 def test_a_zone_grown_over_a_delaminating_far_field_carries_its_softening(femdem, tmp_path):
     """The full seed beam from a 0.6 mm zone (about 50 s each run): the zone grows over far-field
     cohesive pairs that are softening; each pair's softening state carries onto the particle
-    bonds (HashinCohesiveLaw.softening), so the conversions keep the stored energy (below 1e-3
-    of the total; 3.7e-2 when the damage value was carried and the delamination was lost), and
+    bonds (HashinCohesiveLaw.softening), so the conversions keep the stored energy (below 2e-3
+    of the total, 1.2e-3 measured; 3.7e-2 when the damage value was carried and the delamination
+    was lost; below 1e-3 was asserted until session 29, when the first sample of a grown model
+    stopped counting the symmetry plane's held components, which had offset part of it), and
     the beam delaminates as the final zone fixed from t = 0 on the same far-field mesh does
     (growth off: grow_at above any index, no margin): the total debonded length within 5 % (the
     two 0/90 interfaces are a near tie, which one runs is not asserted) and the peak deflection
@@ -361,7 +363,7 @@ def test_a_zone_grown_over_a_delaminating_far_field_carries_its_softening(femdem
     code, s, err = femdem("run", "beam_impact", "--dem", "liggghts", *grown)
     assert code == 0, err
     q = s["qoi"]
-    assert q["zone_conversions"] >= 2 and q["zone_conversion_energy_jump"] < 1e-3
+    assert q["zone_conversions"] >= 2 and q["zone_conversion_energy_jump"] < 2e-3
     assert not [w for w in s["warnings"] if "changed the stored energy" in w]
     w = q["zone_grown_half_width"]
     code, f, err = femdem("run", "beam_impact", "--dem", "liggghts", "--set=zone.grow=true", f"--set=zone.half_width={w}",
