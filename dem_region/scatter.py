@@ -2,7 +2,8 @@
 
 Each bond's factor 1 + s u, u uniform in [-1, 1), comes from a hash of the seed, the bond's
 midpoint on the half-spacing grid and its branch vector in spacings (the two diagonals of a
-cell share a midpoint). So one bond has one strength in every model that holds it: a zone of
+cell share a midpoint; either end may come first). So one bond has one strength in every model
+that holds it: a zone of
 any size, a zone grown during the run (study/growth.py: the bonds it keeps and the fresh ones
 alike), the all-DEM beam. Drawn in sequence instead, a wider zone would reshuffle every
 strength.
@@ -25,7 +26,13 @@ def strength_scale(x: np.ndarray, pairs: np.ndarray, d: float, seed: int, scatte
     """(nb,) each bond's strength factor 1 + scatter * u. x (n, 3) m the particles at rest,
     pairs (nb, 2) the bonds' ends, d m the lattice spacing (positions on its half grid)."""
     a, b = x[pairs[:, 0]], x[pairs[:, 1]]
-    keys = np.column_stack([np.round((a + b) / d), np.round((b - a) / d)]).astype(np.int64).view(np.uint64)
+    mid, branch = (a + b) / d, (b - a) / d
+    if len(pairs) and np.abs(mid - np.round(mid)).max() > 1e-6:
+        raise ValueError("bond midpoints off the lattice's half-spacing grid: their strengths would share keys")
+    branch = np.round(branch)
+    first = branch[np.arange(len(branch)), np.argmax(branch != 0, axis=1)]  # its first non-zero component
+    branch *= np.where(first < 0, -1.0, 1.0)[:, None]  # either end first: one bond, one key
+    keys = np.column_stack([np.round(mid), branch]).astype(np.int64).view(np.uint64)
     with np.errstate(over="ignore"):
         h = np.full(len(pairs), _mix(np.array([np.uint64(seed) * _GOLDEN]))[0])
         for k in range(keys.shape[1]):

@@ -228,6 +228,15 @@ def test_a_bonded_beam_resumed_after_a_conversion_finishes_as_the_uninterrupted_
         assert np.array_equal(v, resumed["history"][k], equal_nan=True), k
 
 
+def test_a_zone_narrower_than_its_margin_waits_for_a_reason_to_grow(femdem):
+    """A bonded beam's 1.5 in zone (its margin, the beam's depth, is twice that) under the load's
+    first 20 us: no element near its edge reaches grow_at and nothing touches it, so it stays."""
+    code, s, err = femdem("run", "cfrp_beam_impact_coarse", "--dem", "liggghts",
+                          *_sets(dict(CFRP, **{"zone.half_width": 0.0381, "clock.t_end": 2e-5})))
+    assert code == 0, err
+    assert s["qoi"]["zone_conversions"] == 0
+
+
 @pytest.mark.parametrize("sets, key", [
     ({"zone.grow_to": 0.36}, "zone.grow_to"),
     ({"zone.grow_to": 0.05}, "zone.grow_to"),

@@ -39,6 +39,8 @@ def test_the_scatter_is_uniform_and_keyed_by_place(seed, s, d):
     mid = np.round((x[pairs[:, 0]] + x[pairs[:, 1]]) / d).astype(int)
     _, count = np.unique(mid, axis=0, return_counts=True)
     assert np.all(count <= 2) and len(np.unique(f)) == n
+    # either end first: the same bond, the same factor
+    assert np.array_equal(strength_scale(x, pairs[:, ::-1], d, seed, s), f)
     # a smaller lattice's bonds (the first 30 columns, offset in the big one's order) keep their factors
     xs, ps = _lattice(30, 20, d)
     fs = strength_scale(xs, ps, d, seed, s)

@@ -477,7 +477,9 @@ def _fem_beam(study, p: dict, built: Built, t_end: float):
     share_x = max(1.0, np.diff(np.unique(X[top, 0])).min() / d)
     share_y = 1.0
     if dim == 3:  # (a mesh file's: its smallest spacing across the top)
-        wide = np.diff(np.unique(X[top, 1])).min() if p["mesh.file"] else 0.5 * p["geometry.width"] / p["mesh.elements_width"]
+        tol = 1e-6 * d  # (a mesh file's coordinates carry round-off)
+        wide = np.diff(np.unique(np.round(X[top, 1] / tol)) * tol).min() if p["mesh.file"] else \
+            0.5 * p["geometry.width"] / p["mesh.elements_width"]
         share_y = max(1.0, wide / d)
     imps = {}
     for name in study.layout.names["impactors"]:

@@ -26,8 +26,10 @@ far field is the old mesh less the columns that became particles. What carries o
   state (the same fraction of the way from onset to decohesion: HashinCohesiveLaw.damage_on).
 - Impactors and particle loads: their state; the particles they act on get their last
   contact or load state.
-- Momentum: the converted particles' velocities are shifted by one common vector so that the
-  total momentum equals the old model's at that step (to round-off). The energy that changes
+- Momentum: each component of the converted particles' velocities is shifted by one common
+  value, over the particles free in it (not those on a symmetry plane normal to it, whose
+  component is held at zero), so that the total momentum equals the old model's at that step
+  (to round-off). The energy that changes
   (the elements' strain energy against the bonds', the masses' new distribution) is reported
   for each conversion; the ledger carries the work and the dissipation over.
 
@@ -100,7 +102,7 @@ JUMP_WARNING = 1e-2
 
 
 class Growth:
-    """The zone of one coupled beam run as it grows: decides, converts, and keeps the record
+    """The zone of one coupled run as it grows: decides, converts, and keeps the record
     (each conversion's time, half width, energy and momentum jumps) and the ledger's offsets."""
 
     def __init__(self, study, p: dict, dem: str, built, sim):
@@ -187,7 +189,8 @@ class Growth:
         w = self.half_width
         reach = grown_reach(self._x0[flagged], self._x1[flagged], w, self.margin)
         contact = self.contact_reach()
-        if reach <= w * (1 + 1e-9) and contact + self.margin <= w * (1 + 1e-9):
+        near = contact > 0 and contact + self.margin > w * (1 + 1e-9)  # (no contact: nothing to follow)
+        if reach <= w * (1 + 1e-9) and not near:
             return None
         reach = max(reach, contact)
         target = min(np.ceil((reach + self.margin) / self.d - 1e-9) * self.d, self.limit)

@@ -68,10 +68,6 @@ class LiggghtsBackend(VerletArrays):
             raise NotImplementedError(f"liggghts adapter: {missing} is not available on this engine yet")
         self.scene = scene
         self.tmp = scratch_dir("liggghts")
-        with _std_streams_to(self.tmp / "streams.liggghts"):
-            self._build(scene)
-
-    def _build(self, scene: DemScene) -> None:
         # LIGGGHTS ends the process on an input error: its log (in the scene's temp dir, or on
         # screen with FEMDEM_LIGGGHTS_SCREEN=1) is where the reason is
         argv = [b"liggghts", b"-log", str(self.tmp / "log.liggghts").encode()]
@@ -79,7 +75,11 @@ class LiggghtsBackend(VerletArrays):
             argv += [b"-screen", b"none"]
         args = (ctypes.c_char_p * len(argv))(*argv)
         self.h = ctypes.c_void_p()
-        self.lib.lammps_open_no_mpi(len(argv), args, ctypes.byref(self.h))
+        if os.environ.get("FEMDEM_LIGGGHTS_SCREEN"):
+            self.lib.lammps_open_no_mpi(len(argv), args, ctypes.byref(self.h))
+        else:  # a second instance in one process warns of its style tables' "collisions" (harmless)
+            with _std_streams_to(self.tmp / "streams.liggghts"):
+                self.lib.lammps_open_no_mpi(len(argv), args, ctypes.byref(self.h))
         n = scene.n
         types, btype = self._bond_types(scene)
         lo, hi = scene.x.min(axis=0) - 10 * scene.radius.max(), scene.x.max(axis=0) + 10 * scene.radius.max()
@@ -160,8 +160,7 @@ class LiggghtsBackend(VerletArrays):
 
     # -- stepping ----------------------------------------------------------------------------
     def start(self, between: Callable[[], None] | None = None) -> None:
-        with _std_streams_to(self.tmp / "streams.liggghts"):
-            self._cmd("run 0")
+        self._cmd("run 0")
         self._refresh_store()
         self._hook_phase(between)
 
@@ -207,8 +206,9 @@ class LiggghtsBackend(VerletArrays):
 @contextmanager
 def _std_streams_to(path):
     """The process's stdout and stderr (file descriptors 1, 2) appended to ``path`` meanwhile:
-    a second LIGGGHTS in one process prints its static style tables' "collision" warnings
-    there, whatever -screen says (harmless: the styles are the same)."""
+    a second LIGGGHTS instance in one process prints its static style tables' "collision"
+    warnings there at its creation, whatever -screen says (harmless: the styles are the
+    same)."""
     libc = ctypes.CDLL(None)
     sys.stdout.flush()
     sys.stderr.flush()
