@@ -82,19 +82,19 @@ def test_the_grown_model_holds_the_beam_s_mass_and_covers_what_the_criterion_fla
     assert hoffman.max() < p["zone.grow_at"]
 
 
-def test_a_run_resumed_after_a_conversion_finishes_as_the_uninterrupted_one(tmp_path):
-    """LAMMPS (its laws in the worker): a checkpoint taken after the zone grew, resumed in a new
-    process's model (the first zone's, rebuilt to the checkpoint's), gives the uninterrupted
-    history to the bit."""
+def _resumed_as_straight(tmp_path, name: str, sets: dict, dem: str, at: float):
+    """A run that checkpoints once, at the fraction ``at`` of its steps, after its zone grew, and
+    the run resumed from that checkpoint in a new model (the first zone's, rebuilt to the
+    checkpoint's): their histories, bit for bit."""
     from coupling import checkpoint
-    case = load_case("beam_impact_coarse", dict(GROW, **{"clock.t_end": 9e-6}))
+    case = load_case(name, sets)
     study, p = case.scene, case.parameters
 
     def run(**kw):
-        sim = study.build(p, "coupled", "lammps")
+        sim = study.build(p, "coupled", dem)
         try:
-            if "run_dir" in kw:  # one checkpoint, at two thirds of the run
-                kw["checkpoint_every"] = 2 * sim.n_steps // 3
+            if "run_dir" in kw:
+                kw["checkpoint_every"] = int(at * sim.n_steps)
             return run_clock(sim, **kw), study.growth
         finally:
             sim.close()
@@ -107,6 +107,11 @@ def test_a_run_resumed_after_a_conversion_finishes_as_the_uninterrupted_one(tmp_
     resumed, _ = run(resume_from=ck)
     for k, v in straight["history"].items():
         assert np.array_equal(v, resumed["history"][k], equal_nan=True), k
+
+
+def test_a_run_resumed_after_a_conversion_finishes_as_the_uninterrupted_one(tmp_path):
+    """LAMMPS (its laws in the worker), the checkpoint at two thirds of the run."""
+    _resumed_as_straight(tmp_path, "beam_impact_coarse", dict(GROW, **{"clock.t_end": 9e-6}), "lammps", 2 / 3)
 
 
 @pytest.mark.parametrize("sets, key", [
@@ -204,28 +209,9 @@ def test_a_grown_bonded_beam_holds_its_mass_and_its_bonds_strengths(name):
 
 
 def test_a_bonded_beam_resumed_after_a_conversion_finishes_as_the_uninterrupted_one(tmp_path):
-    """LIGGGHTS in process: a checkpoint taken after the first conversion (158 us), resumed in a
-    new model (the case's 3 in zone rebuilt to the checkpoint's), gives the uninterrupted history
-    to the bit."""
-    from coupling import checkpoint
-    case = load_case("cfrp_beam_impact_coarse", dict(CFRP, **{"clock.t_end": 2.4e-4}))
-    study, p = case.scene, case.parameters
-
-    def run(**kw):
-        sim = study.build(p, "coupled", "liggghts")
-        try:
-            if "run_dir" in kw:  # one checkpoint, at three quarters of the run
-                kw["checkpoint_every"] = 3 * sim.n_steps // 4
-            return run_clock(sim, **kw), study.growth
-        finally:
-            sim.close()
-
-    straight, growth = run(run_dir=tmp_path)
-    ck = checkpoint.latest(tmp_path)
-    assert checkpoint.read(ck)["loop"]["growth"]["half_width"] > p["zone.half_width"]
-    resumed, _ = run(resume_from=ck)
-    for k, v in straight["history"].items():
-        assert np.array_equal(v, resumed["history"][k], equal_nan=True), k
+    """LIGGGHTS in process, the checkpoint at three quarters of the run (after the first
+    conversion, 158 us)."""
+    _resumed_as_straight(tmp_path, "cfrp_beam_impact_coarse", dict(CFRP, **{"clock.t_end": 2.4e-4}), "liggghts", 0.75)
 
 
 def test_a_zone_narrower_than_its_margin_waits_for_a_reason_to_grow(femdem):
