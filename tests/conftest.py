@@ -8,6 +8,7 @@ if int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1")) > 1:
 
 import coupling  # noqa: E402, F401  (first: it sets the BLAS threads before numpy loads)
 import json
+import math
 import tempfile
 import tomllib
 from pathlib import Path
@@ -92,3 +93,21 @@ def unranged(case: str) -> str:
     path = _UNRANGED / f"{case}.toml"
     path.write_text(text[: text.index("[ranges]")])
     return str(path)
+
+
+def ranged_draw(case: str):
+    """A strategy of --set lists over every key of the case file's [ranges] at once: the depth
+    drawn as whole rows of the case's particle size, a 3D beam's width as whole spacings on each
+    side of its plane of symmetry (any other is refused), integer keys as integers; and the run's
+    end, 0.45 ms of the test's load, stretched with its time scale."""
+    data = tomllib.loads((SEED_CASES / f"{case}.toml").read_text())
+    ranges, d = data["ranges"], data["zone"]["particle_size"]
+    whole = {"geometry.depth": d, **({"geometry.width": 2 * d} if data["geometry"]["shape"].endswith("_3d") else {})}
+    draws = {k: verified(v) for k, v in ranges.items() if k not in whole}
+    draws.update({k: st.integers(math.ceil(ranges[k][0] / step - 1e-9), math.floor(ranges[k][1] / step + 1e-9)).map(
+        lambda n, step=step: n * step) for k, step in whole.items()})
+
+    def sets(values):
+        t_end = 0.45e-3 * values["loads.drop.time_scale"] / data["loads"]["drop"]["time_scale"]
+        return set_args({**values, "clock.t_end": t_end})
+    return st.fixed_dictionaries(draws).map(sets)

@@ -2,7 +2,6 @@
 schema's refusals for it, the test-data checks, and its closed-form check over the materials
 and loads of its verified ranges (issue #22)."""
 import math
-import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -10,7 +9,7 @@ import pytest
 from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
-from conftest import set_args, verified
+from conftest import ranged_draw
 
 ROOT = Path(__file__).resolve().parents[1]
 CFRP = ROOT / "cases" / "seed" / "cfrp_beam_impact_coarse.toml"
@@ -91,24 +90,6 @@ def test_test_data_checks_compare_with_the_values_in_the_file():
     assert not checks["debonded_fraction_750us"]["passed"]  # below 0.1
     assert "crack_onset_time" not in checks  # its qoi is not in this run: the FEM twin is not run
     assert "Jerome & Ross" in checks["crack_initiation_time"]["source"]
-
-
-def ranged_draw(case: str):
-    """A strategy of --set lists over every key of the case file's [ranges] at once: the depth
-    drawn as whole rows of the case's particle size, a 3D beam's width as whole spacings on each
-    side of its plane of symmetry (any other is refused), integer keys as integers; and the run's
-    end, 0.45 ms of the test's load, stretched with its time scale."""
-    data = tomllib.loads((ROOT / "cases" / "seed" / f"{case}.toml").read_text())
-    ranges, d = data["ranges"], data["zone"]["particle_size"]
-    whole = {"geometry.depth": d, **({"geometry.width": 2 * d} if data["geometry"]["shape"].endswith("_3d") else {})}
-    draws = {k: verified(v) for k, v in ranges.items() if k not in whole}
-    draws.update({k: st.integers(math.ceil(ranges[k][0] / step - 1e-9), math.floor(ranges[k][1] / step + 1e-9)).map(
-        lambda n, step=step: n * step) for k, step in whole.items()})
-
-    def sets(values):
-        t_end = 0.45e-3 * values["loads.drop.time_scale"] / data["loads"]["drop"]["time_scale"]
-        return set_args({**values, "clock.t_end": t_end})
-    return st.fixed_dictionaries(draws).map(sets)
 
 
 @settings(max_examples=1, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.generate],

@@ -15,6 +15,7 @@ import pytest
 from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
+from conftest import ranged_draw
 from coupling.case import load_case
 from coupling.simulation import run_clock
 
@@ -212,6 +213,40 @@ def test_a_bonded_beam_resumed_after_a_conversion_finishes_as_the_uninterrupted_
     """LIGGGHTS in process, the checkpoint at three quarters of the run (after the first
     conversion, 158 us)."""
     _resumed_as_straight(tmp_path, "cfrp_beam_impact_coarse", dict(CFRP, **{"clock.t_end": 2.4e-4}), "liggghts", 0.75)
+
+
+def _bonded_grows(femdem, tmp_path, sets: list, dem: str) -> None:
+    code, s, err = femdem("run", "cfrp_beam_impact_coarse", "--dem", dem, "--set=zone.grow=true", *sets)
+    assert code == 0, err
+    q = s["qoi"]
+    assert s["checks"]["energy_balance"]["passed"], s["checks"]["energy_balance"]
+    assert q["zone_conversions"] >= 1  # (the concrete's index spreads from the zone's edge within 0.45 ms)
+    assert q["zone_conversion_momentum_jump"] < 1e-12
+    runs = sorted(tmp_path.glob("run*"), key=lambda d: d.stat().st_mtime)
+    with h5py.File(runs[-1] / "history.h5") as h:
+        widths, series = h["history"]["zone.conversion_half_width"][:], h["history"]["zone_half_width"][:]
+    assert np.all(np.diff(widths) > 0) and np.all(np.diff(series) >= 0)
+    assert np.allclose(widths / 3.81e-3, np.round(widths / 3.81e-3), atol=1e-6)
+    if not [w for w in s["warnings"] if "grows no further" in w]:  # (at its limit the far field may go on)
+        assert q["damage_at_zone_edge"] == 0.0
+
+
+@settings(max_examples=1, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.generate],
+          suppress_health_check=[HealthCheck.function_scoped_fixture])  # (one draw: the suite's budget)
+@given(sets=ranged_draw("cfrp_beam_impact_coarse"))
+def test_a_bonded_beam_grows_anywhere_in_its_ranges(femdem, tmp_path, sets):
+    """Grown from the case's zone anywhere in its [ranges] (every key drawn at once, to 0.45 ms
+    of the load): it grows, the ledger closes, the momentum to round-off at each conversion, zones in
+    whole spacings that only grow, and no damage at the zone's edge unless it reached its limit."""
+    _bonded_grows(femdem, tmp_path, sets, "liggghts")
+
+
+@pytest.mark.slow
+@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(dem=st.sampled_from(["liggghts", "lammps", "yade"]), sets=ranged_draw("cfrp_beam_impact_coarse"))
+def test_a_bonded_beam_grows_anywhere_in_its_ranges_on_every_engine(femdem, tmp_path, dem, sets):
+    """The same, six random draws over the three engines (-m slow)."""
+    _bonded_grows(femdem, tmp_path, sets, dem)
 
 
 def test_a_zone_narrower_than_its_margin_waits_for_a_reason_to_grow(femdem):
