@@ -321,6 +321,23 @@ def test_a_plate_grown_answers_as_its_final_zone_fixed(femdem):
     assert abs(q["peak_deflection"] / fixed["qoi"]["peak_deflection"] - 1) < 0.03
 
 
+@pytest.mark.slow
+@settings(max_examples=3, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(v=st.floats(1.5, 2.5), cells=st.integers(4, 7), grow_at=st.floats(0.3, 0.7))
+def test_a_plate_s_zone_grows_from_any_start(femdem, tmp_path, v, cells, grow_at):
+    """The plate from a square of 4-7 particle spacings (0.5 mm), struck at 1.5-2.5 m/s, growing
+    at a Hoffman index of 0.3-0.7 (three random draws, -m slow): the ledger closes, each
+    conversion keeps the momentum to round-off, and the square grows in whole spacings."""
+    sets = dict(PLATE, **{"impactors.ball.velocity": v, "zone.half_width": cells * 0.5e-3, "zone.grow_at": grow_at})
+    code, s, err = femdem("run", str(_plate()), "--dem", "liggghts", *_sets(sets))
+    assert code == 0, err
+    q = s["qoi"]
+    assert s["checks"]["energy_balance"]["passed"], s["checks"]["energy_balance"]
+    assert q["zone_conversion_momentum_jump"] < 1e-12
+    w = q["zone_grown_half_width"]
+    assert w >= cells * 0.5e-3 and abs(w / 0.5e-3 - round(w / 0.5e-3)) < 1e-6
+
+
 @pytest.mark.parametrize("name, sets, key", [
     ("clamped_plate", {"zone.shape": "cylinder"}, "zone.shape"),
     ("rod_impact_coarse", {}, "zone.grow"),
