@@ -208,17 +208,11 @@ def beam(study, p: dict, mode: str, dem: str, start=None):
         raise CaseError(f"zone.half_width = {w:g}: allowed between two particle sizes ({2 * t:g} m) and 0.8 x "
                         "half the span")
     if mode == "coupled" and p.get("zone.grow"):
-        if p["coupling.tie"] != "kinematic":
-            raise CaseError(f"coupling.tie = {p['coupling.tie']!r}: a growing zone rebuilds a kinematic tie (its "
-                            "particles' momentum in the FEM's nodes); allowed with zone.grow = true: kinematic")
+        xg = grow_limit(p, built)
+        check_growth(p, t, w, xg, xg < 0.8 * L, f"below 0.8 x half the span ({0.8 * L:g} m)")
         if p.get("mesh.file"):
             raise CaseError("zone.grow = true: not with a mesh file (mesh.file), whose line at the zone's edge fixes "
                             "the zone; allowed: zone.grow = false")
-        xg = grow_limit(p, built)
-        # (a grown zone may reach grow_to itself)
-        if not w <= xg * (1 + 1e-9) or not xg < 0.8 * L or abs(xg / t - round(xg / t)) > 1e-6:
-            raise CaseError(f"zone.grow_to = {p['zone.grow_to']:g}: allowed whole particle spacings ({t:g} m) from "
-                            f"the zone's half width ({w:g} m) to below 0.8 x half the span ({0.8 * L:g} m)")
     for name in study.layout.names["impactors"]:  # a punch's face stays on the particles
         hw = p.get(f"impactors.{name}.half_width", 0.0)
         if mode == "coupled" and hw > w - 2 * t:
@@ -311,6 +305,19 @@ def _through(p: dict, lam: Laminate) -> np.ndarray:
         return np.linspace(0.0, lam.thickness, sum(lam.plies) // p["zone.plies_per_particle"] + 1)
     tops = np.cumsum([0] + lam.plies) * lam.ply_thickness
     return np.unique(np.concatenate([np.linspace(a, b, n_run + 1) for a, b in zip(tops[:-1], tops[1:])]))
+
+
+def check_growth(p: dict, d: float, w: float, xg: float, fits: bool, limit: str) -> None:
+    """A growing zone's keys: a kinematic tie (a grown zone rebuilds one), and its limit xg (m,
+    zone.grow_to or the shape's default) whole particle spacings d from the zone's half width w
+    (a grown zone may reach the limit itself); ``fits``: the shape's bound on xg holds, said by
+    ``limit``. CaseError (one line) otherwise."""
+    if p["coupling.tie"] != "kinematic":
+        raise CaseError(f"coupling.tie = {p['coupling.tie']!r}: a growing zone rebuilds a kinematic tie (its "
+                        "particles' momentum in the FEM's nodes); allowed with zone.grow = true: kinematic")
+    if not w <= xg * (1 + 1e-9) or not fits or abs(xg / d - round(xg / d)) > 1e-6:
+        raise CaseError(f"zone.grow_to = {p['zone.grow_to']:g}: allowed whole particle spacings ({d:g} m) from "
+                        f"the zone's half width ({w:g} m) to {limit}")
 
 
 def grow_limit(p: dict, built: Built) -> float:
@@ -758,13 +765,8 @@ def _check_plate_growth(p: dict, built: Built, fp) -> None:
     if p["zone.shape"] != "box":
         raise CaseError(f"zone.shape = {p['zone.shape']!r}: a plate's zone grows as a box (zone.grow = true); "
                         "allowed: box")
-    if p["coupling.tie"] != "kinematic":
-        raise CaseError(f"coupling.tie = {p['coupling.tie']!r}: a growing zone rebuilds a kinematic tie (its "
-                        "particles' momentum in the FEM's nodes); allowed with zone.grow = true: kinematic")
     xg = plate_grow_limit(p, built)
-    if not fp.w <= xg * (1 + 1e-9) or not xg < 0.8 * half or abs(xg / d - round(xg / d)) > 1e-6:
-        raise CaseError(f"zone.grow_to = {p['zone.grow_to']:g}: allowed whole particle spacings ({d:g} m) from "
-                        f"the zone's half width ({fp.w:g} m) to below 0.8 x the smaller half side ({0.8 * half:g} m)")
+    check_growth(p, d, fp.w, xg, xg < 0.8 * half, f"below 0.8 x the smaller half side ({0.8 * half:g} m)")
 
 
 def _reserved_axis(xg: float, half: float, d: float, n: int, ratio: float) -> np.ndarray:

@@ -46,7 +46,7 @@ from ..params import CaseError
 from ..participants.coupled import coupled_simulation
 from ..participants.dem import dem_only, hold_symmetry_planes
 from ..participants.fem import fem_only, make_region
-from .assemble import Built
+from .assemble import Built, check_growth
 from .schema import section
 
 
@@ -263,13 +263,8 @@ def _check_growth(p: dict, bb: BondedBeam, w: float) -> None:
     """A growing zone's keys (as the beams', assemble.beam): a kinematic tie, grow_to whole spacings
     from the zone's half width to four spacings short of the support; CaseError otherwise."""
     d, s = bb.d, bb.span / 2
-    if p["coupling.tie"] != "kinematic":
-        raise CaseError(f"coupling.tie = {p['coupling.tie']!r}: a growing zone rebuilds a kinematic tie (its "
-                        "particles' momentum in the FEM's nodes); allowed with zone.grow = true: kinematic")
     xg = grow_limit(p, bb)
-    if not w <= xg * (1 + 1e-9) or xg > (s - 4 * d) * (1 + 1e-9) or abs(xg / d - round(xg / d)) > 1e-6:
-        raise CaseError(f"zone.grow_to = {p['zone.grow_to']:g}: allowed whole particle spacings ({d:g} m) from the "
-                        f"zone's half width ({w:g} m) to four short of the support ({s - 4 * d:g} m)")
+    check_growth(p, d, w, xg, xg <= (s - 4 * d) * (1 + 1e-9), f"four short of the support ({s - 4 * d:g} m)")
 
 
 def _fem_region(p: dict, bb: BondedBeam, x0: float, dim: int, reserve: float = 0.0):
