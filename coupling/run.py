@@ -66,6 +66,9 @@ def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool,
         sim = result.pop("simulation", sim)  # a grown zone's model, if the zone grew
         if status == "ok":
             qoi, checks = scene.evaluate(case.parameters, result["history"], mode)
+            if sim.growth is not None and "zone_conversions" not in qoi:  # a specimen's growing window
+                qoi.update(sim.growth.qoi())
+                result["history"].update(sim.growth.history())
             t0 = time.perf_counter()
             scene.plot(case.parameters, result["history"], qoi, writer.dir / "plots")
             result["timing_s"]["io"] += time.perf_counter() - t0

@@ -19,6 +19,7 @@ import numpy as np
 from ..checks import bound, check
 from ..params import CaseError, Param
 from . import delamination as dl
+from . import window_growth
 from ..participants.coupled import COUPLING
 
 # Periods of the cracked arm before the peak load (load.duration_periods / final_opening_factor),
@@ -44,6 +45,7 @@ PARAMETERS = {
     "dem.margin": dl.ranged(4e-3, "DEM window behind a0, and beyond the final crack tip if longer than the "
                             "cohesive zone", "m", 1e-3, 20e-3),
     **COUPLING,
+    **window_growth.PARAMETERS,
 }
 
 
@@ -144,13 +146,25 @@ def window(p: dict, cf: dict, a_end: float, d: float) -> tuple[float, float]:
 
 
 def build(p: dict, mode: str, dem: str):
+    (x_a, x_b), warnings = domain(p, mode)
+    if mode == "coupled" and p["zone.grow"]:
+        sim = window_growth.growing(p, dem, x_a, lambda q, x_b, reserve, start: model(q, mode, dem, x_a, x_b,
+                                                                                      reserve, start))
+    else:
+        sim, _ = model(p, mode, dem, x_a, p["dem.window_end"] or x_b)
+    sim.warnings += warnings
+    return sim
+
+
+def model(p: dict, mode: str, dem: str, x_a: float, x_b: float, reserve=None, start=None):
+    """(Simulation, Specimen) with the DEM window [x_a, x_b] m (coupled); reserve, start: a
+    growing window's (window_growth.py)."""
     cf = closed_form(p)
     h = p["geometry.arm_thickness"]
     delta_end = p["load.final_opening_factor"] * cf["delta_peak"]
     a0 = p["geometry.crack_length"]
-    (x_a, x_b), warnings = domain(p, mode)
     omega = dl.cantilever_omega(p, a0)
-    spec = dl.specimen(p, mode, a0, x_a, x_b, omega)
+    spec = dl.specimen(p, mode, a0, x_a, x_b, omega, reserve=reserve)
     t_load = p["load.duration_periods"] * 2 * np.pi / omega
     t_ramp = p["load.ramp_time"] or 2 * 2 * np.pi / omega
     v0 = 0.5 * delta_end / (t_load - 0.5 * t_ramp)  # per arm; the ramp's lost distance made up
@@ -164,7 +178,7 @@ def build(p: dict, mode: str, dem: str):
     pin = np.flatnonzero((np.abs(X[:, 0] - X[:, 0].max()) < 1e-9) & (np.abs(X[:, 1] - h) < 1e-9 * h))[:1]
     up, down = 2 * spec.upper_end + 1, 2 * spec.lower_end + 1
     supports = [PrescribedMotion(up, speed), PrescribedMotion(down, lambda t: -speed(t)), PrescribedMotion(2 * pin)]
-    sim, fem, bonds = dl.simulate(p, mode, dem, spec, supports, dl.damping_alpha(p, omega), t_load)
+    sim, fem, bonds = dl.simulate(p, mode, dem, spec, supports, dl.damping_alpha(p, omega), t_load, start)
     wf = spec.width_factor
     sim.probes.update({
         "load": lambda: wf * fem.reaction(up),
@@ -174,8 +188,7 @@ def build(p: dict, mode: str, dem: str):
         "cohesive_zone_bonds": lambda: dl.softening_bonds(bonds),
     })
     sim.counts["law_bonds"] = len(bonds.pairs)
-    sim.warnings += warnings
-    return sim
+    return sim, spec
 
 
 def evaluate(p: dict, h: dict, mode: str):

@@ -36,8 +36,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from physics.failure import HoffmanStrengths
 from physics.law_bonds import LawBonds
-from physics.laws import MIXED_MODE, HashinCohesiveLaw
+from physics.laws import MIXED_MODE, HashinCohesiveLaw, PlyBondLaw
 from dem_region.scene import DemScene
 from fem_region import materials, mesh
 from fem_region.explicit import ExplicitDynamics
@@ -133,6 +134,8 @@ class Specimen:
     pair_area: np.ndarray | None = None
     a0: float = 0.0  # m, the initial crack: bonds behind it start debonded
     face: NodeToFace | None = None  # all-FEM with the arms meshed independently: node-to-face bonds
+    springs: LawBonds | None = None  # a growing window's lattice springs (window_growth.py)
+    clock: object = None  # the coupled model's CoupledClock, once simulate has built it
 
 
 def slice_ply(p: dict) -> np.ndarray:
@@ -142,10 +145,14 @@ def slice_ply(p: dict) -> np.ndarray:
 
 
 def build_specimen(p: dict, a0: float, x_a: float, x_b: float, omega_arm: float,
-                   stations: tuple[float, ...] = ()) -> Specimen:
+                   stations: tuple[float, ...] = (), reserve: tuple[float, float, float] | None = None) -> Specimen:
     """Mesh, DEM window [x_a, x_b] (rounded to whole spacings), law bonds debonded for x < a0;
     ``stations`` (m): x of supports and load lines, which get a line of mesh nodes. The
-    particle size is the caller's to check (check_resolution, in each specimen's validity)."""
+    particle size is the caller's to check (check_resolution, in each specimen's validity).
+    reserve (x0, x1, e) m: a window that may grow (window_growth.py): mesh lines every e from
+    x0 to x1, so that any grown window ends on one and its FEM is this mesh less the band's
+    elements it took; the lattice's springs are then law bonds (``springs``), whose rest
+    lengths are the lattice's, not the positions an engine is built with."""
     h, L = p["geometry.arm_thickness"], p["geometry.length"]
     r = 0.5 * p["zone.particle_size"]
     d = 2 * r
@@ -160,8 +167,16 @@ def build_specimen(p: dict, a0: float, x_a: float, x_b: float, omega_arm: float,
     # x lines: graded into the window's ends, the window itself at the particle spacing's multiple
     def line(a, b):
         return np.linspace(a, b, max(1, int(np.ceil((b - a) / ex - 1e-9))) + 1) if b > a + 1e-12 else np.array([a])
-    breaks = np.unique(np.concatenate([[0.0, x_a, x_b, L], [x for x in stations if 0.0 < x < L]]))
-    xs = np.unique(np.concatenate([line(a, b) for a, b in zip(breaks[:-1], breaks[1:])]))
+    inner = [x for x in stations if 0.0 < x < L]
+    if reserve is None:
+        breaks = np.unique(np.concatenate([[0.0, x_a, x_b, L], inner]))
+        xs = np.unique(np.concatenate([line(a, b) for a, b in zip(breaks[:-1], breaks[1:])]))
+    else:
+        x0, x1, e = reserve
+        grid = x0 + e * np.arange(int(round((x1 - x0) / e)) + 1)
+        breaks = np.unique(np.concatenate([[0.0, x_a, x0, x1, L], inner]))
+        xs = np.unique(np.concatenate([grid, inner] + [line(a, b) for a, b in zip(breaks[:-1], breaks[1:])
+                                                       if not (x0 - 1e-9 * L < a and b < x1 + 1e-9 * L)]))
     nt = p["mesh.elements_through"]
     ys = np.unique(np.concatenate([np.linspace(0, h - band, nt + 1), [h], np.linspace(h + band, 2 * h, nt + 1)]))
     tol = 1e-9 * L
@@ -178,8 +193,12 @@ def build_specimen(p: dict, a0: float, x_a: float, x_b: float, omega_arm: float,
                     tie_first=x_a > 0)
     x, cols = w.x, w.x[w.lower, 0]
     sphere_rho = rho * d**3 / (4.0 / 3.0 * np.pi * r**3)
+    springs = None
+    if reserve is not None:
+        springs = lattice_springs(w, x, d, t, tied=p["coupling.tie"] == "kinematic")
+        w.kn[: len(w.kn) - len(w.lower)] *= 1e-9  # the engine's bonds: placeholders (as the law pairs')
     scene = DemScene(x, r, sphere_rho, w.pairs, kn=w.kn, ks=0.0, plane=True, young=E22,
-                     groups={"interface": np.flatnonzero(w.tied)})
+                     groups={"interface": np.flatnonzero(w.tied)}, placeholder_bonds=springs is not None)
 
     law = HashinCohesiveLaw(K=K, Z0=Z0, R0=R0, GIc=p["interface.GIc"],
                             GIIc=p["interface.GIIc"], eta=p["interface.eta"], mixed_mode=p["interface.mixed_mode"])
@@ -194,7 +213,29 @@ def build_specimen(p: dict, a0: float, x_a: float, x_b: float, omega_arm: float,
     end = region.X[:, 0] < tol
     return Specimen(scene=scene, bonds=bonds, t=t, width_factor=p["geometry.width"] / t,
                     region=region, upper_end=np.flatnonzero(end & above), lower_end=np.flatnonzero(end & ~above),
-                    omega_arm=omega_arm)
+                    omega_arm=omega_arm, springs=springs)
+
+
+# the window's plies do not fail (the specimens test the interface): a lattice spring is a ply
+# bond that never initiates
+_NEVER = HoffmanStrengths(*(9 * [np.inf]))
+
+
+def lattice_springs(w: "BandWindow", x: np.ndarray, d: float, t: float, tied: bool) -> LawBonds:
+    """The window's lattice springs (w.pairs less the law pairs, stiffness w.kn N/m) as law
+    bonds on particles x (n, 3) m: linear central springs along the current axis, rest lengths
+    from x (the engine's bonds, in the same corotated form); tied: without the springs
+    between two tied particles, as the kinematic tie removes them (the FEM carries them)."""
+    n_law = len(w.lower)
+    pairs, k = w.pairs[:-n_law], w.kn[:-n_law]
+    if tied:
+        keep = ~(w.tied[pairs[:, 0]] & w.tied[pairs[:, 1]])
+        pairs, k = pairs[keep], k[keep]
+    area = d * t
+    law = PlyBondLaw(K=k / area, Gf=1.0, strengths=_NEVER, axes=np.eye(3))
+    axis = x[pairs[:, 1]] - x[pairs[:, 0]]
+    return LawBonds(pairs, x, axis, area, law, volume=np.full(len(x), d * d * t), label="lattice",
+                    finite_rotation=True)
 
 
 def bond_spacing(p: dict, mode: str) -> float:
@@ -211,11 +252,11 @@ def bond_spacing(p: dict, mode: str) -> float:
 
 
 def specimen(p: dict, mode: str, a0: float, x_a: float, x_b: float, omega_arm: float,
-             stations: tuple[float, ...] = ()) -> Specimen:
+             stations: tuple[float, ...] = (), reserve: tuple[float, float, float] | None = None) -> Specimen:
     """The specimen of ``mode``: coupled (build_specimen: FEM arms, the DEM window [x_a, x_b])
     or fem (cohesive_specimen)."""
     if mode == "coupled":
-        return build_specimen(p, a0, x_a, x_b, omega_arm, stations)
+        return build_specimen(p, a0, x_a, x_b, omega_arm, stations, reserve)
     return cohesive_specimen(p, a0, omega_arm, stations)
 
 
@@ -274,16 +315,18 @@ def _node_to_face_specimen(p: dict, a0: float, omega_arm: float, xs_lower: np.nd
                     omega_arm=omega_arm, pair_area=face.area * d, a0=a0, face=face)
 
 
-def simulate(p: dict, mode: str, dem: str, spec: Specimen, supports, alpha: float, t_end: float):
+def simulate(p: dict, mode: str, dem: str, spec: Specimen, supports, alpha: float, t_end: float, start=None):
     """(Simulation, FEM participant, the crack plane's LawBonds) of a specimen: coupled (the DEM
     window's bonds on the particles) or fem (the node pairs' bonds: penalty 50 E22 / h, Turon
     et al. 2007's alpha = 50 against the arm, or the elements' limit if lower
     (participants.fem.cohesive_penalty; the step is that of both together); strengths by
-    resolved_strengths on the node spacing)."""
+    resolved_strengths on the node spacing). start: a grown window's (coupled_simulation's)."""
     if mode == "coupled":
-        sim, clock = coupled_simulation(p, fem_factory(spec, supports, alpha), spec.scene, dem, t_end,
-                                        models=(spec.bonds,))
-        return sim, clock.fem, spec.bonds
+        models = (spec.bonds,) if spec.springs is None else (spec.bonds, spec.springs)
+        sim, spec.clock = coupled_simulation(p, fem_factory(spec, supports, alpha), spec.scene, dem, t_end,
+                                             models=models, start=start)
+        sim.probes["damage_at_zone_edge"] = lambda: float(spec.bonds.damage[-1])  # the window's last column
+        return sim, spec.clock.fem, spec.bonds
     dyn = ExplicitDynamics(spec.region, supports=supports, alpha=alpha)
     pairs, area, face = spec.pairs, spec.pair_area, spec.face
     m_pair = None if face is None else face_pair_mass(dyn, face)
@@ -459,8 +502,11 @@ def cohesive_zone_qoi(p: dict, h: dict, k: int, Gc: float, tau: float, mode: str
     load, sample k, when the zone has formed) and estimated (cohesive_zone_length / d, d the
     bonds' spacing m)."""
     zone = np.asarray(h.get("cohesive_zone_bonds", [np.nan]))[: k + 1]
-    return {"cohesive_zone_bonds": float(np.max(zone)) if zone.size else float("nan"),
-            "cohesive_zone_bonds_estimate": cohesive_zone_length(p, Gc, tau, mode) / d}
+    out = {"cohesive_zone_bonds": float(np.max(zone)) if zone.size else float("nan"),
+           "cohesive_zone_bonds_estimate": cohesive_zone_length(p, Gc, tau, mode) / d}
+    if "damage_at_zone_edge" in h:  # coupled: the window's last column, the most it was damaged
+        out["damage_at_zone_edge"] = float(np.max(h["damage_at_zone_edge"]))
+    return out
 
 
 def peak_before_growth(P: np.ndarray, tip: np.ndarray, a0: float, run: float) -> int:

@@ -27,6 +27,7 @@ from fem_region.explicit import PrescribedMotion
 from ..checks import check
 from ..params import CaseError, Param
 from . import delamination as dl
+from . import window_growth
 from ..participants.coupled import COUPLING
 
 # Periods of the beam's first mode before the peak load (load.duration_periods /
@@ -63,6 +64,7 @@ PARAMETERS = {
                                    f"{PERIODS_TO_PEAK[0]:g} and at most {PERIODS_TO_PEAK[1]:g}", low=2.0),
     "dem.margin": dl.ranged(4e-3, "DEM window beyond the load line", "m", 1e-3, 20e-3),
     **COUPLING,
+    **window_growth.PARAMETERS,
 }
 
 
@@ -119,10 +121,25 @@ def validity(p: dict, mode: str = "coupled", fracture: str = "II", share: float 
 
 def bending_specimen(p: dict, mode: str, dem: str, cf: dict, single_leg: bool, warnings: list[str]):
     """Three-point bending of the split beam: ENF (both arms on the left support) or single
-    leg bending (only the upper arm on it, so the lower arm's cracked part carries no load)."""
+    leg bending (only the upper arm on it, so the lower arm's cracked part carries no load).
+    The DEM window from x = 0 to dem.window_end (0: the load line plus dem.margin), or growing
+    (zone.grow, window_growth.py)."""
+    if mode == "coupled" and p["zone.grow"]:
+        sim = window_growth.growing(p, dem, 0.0, lambda q, x_b, reserve, start: bending_model(
+            q, mode, dem, cf, single_leg, x_b, reserve, start))
+    else:
+        x_b = p["dem.window_end"] or p["geometry.half_span"] + p["dem.margin"]
+        sim = bending_model(p, mode, dem, cf, single_leg, x_b)[0]
+    sim.warnings += warnings
+    return sim
+
+
+def bending_model(p: dict, mode: str, dem: str, cf: dict, single_leg: bool, x_b: float, reserve=None, start=None):
+    """(Simulation, Specimen) of bending_specimen with the DEM window [0, x_b] m (coupled);
+    reserve, start: a growing window's (window_growth.py)."""
     L, a0, h = p["geometry.half_span"], p["geometry.crack_length"], p["geometry.arm_thickness"]
     omega = beam_omega(p)
-    spec = dl.specimen(p, mode, a0, 0.0, L + p["dem.margin"], omega, stations=(L, 2 * L))
+    spec = dl.specimen(p, mode, a0, 0.0, x_b, omega, stations=(L, 2 * L), reserve=reserve)
     t_load = p["load.duration_periods"] * 2 * np.pi / omega
     t_ramp = p["load.ramp_time"] or 2 * 2 * np.pi / omega
     v0 = p["load.final_deflection_factor"] * cf["delta_peak"] / (t_load - 0.5 * t_ramp)
@@ -144,7 +161,7 @@ def bending_specimen(p: dict, mode: str, dem: str, cf: dict, single_leg: bool, w
     right = np.flatnonzero(bottom & (np.abs(X[:, 0] - 2 * L) < tol))
     supports = [PrescribedMotion(2 * punch + 1, speed), PrescribedMotion(2 * punch[:1]),
                 PrescribedMotion(np.concatenate([2 * left + 1, 2 * right + 1]))]
-    sim, fem, bonds = dl.simulate(p, mode, dem, spec, supports, dl.damping_alpha(p, omega), t_load)
+    sim, fem, bonds = dl.simulate(p, mode, dem, spec, supports, dl.damping_alpha(p, omega), t_load, start)
     wf = spec.width_factor
     sim.probes.update({
         "load": lambda: -wf * fem.reaction(2 * punch + 1),
@@ -154,8 +171,7 @@ def bending_specimen(p: dict, mode: str, dem: str, cf: dict, single_leg: bool, w
         "cohesive_zone_bonds": lambda: dl.softening_bonds(bonds),
     })
     sim.counts["law_bonds"] = len(bonds.pairs)
-    sim.warnings += warnings
-    return sim
+    return sim, spec
 
 
 def bending_warnings(p: dict, mode: str, share: float, d: float, keys: dict = dl.SCENE_KEYS) -> list[str]:

@@ -65,6 +65,12 @@ def _node_keys(region, pairs) -> np.ndarray:
     side = np.zeros(region.n_nodes)
     if pairs is not None and len(pairs):
         side[pairs[:, 1]] = 1.0
+    else:  # a crack's doubled nodes (a specimen's, behind its window): the side their elements lie on
+        X, t = region.X, region.mesh.t
+        twins = cKDTree(X).query_pairs(1e-9 * float(np.ptp(X, axis=0).max()), output_type="ndarray").ravel()
+        mid = np.bincount(t.ravel(), np.broadcast_to(X[t, -1].mean(axis=0), t.shape).ravel(), len(X)) / \
+            np.maximum(np.bincount(t.ravel(), minlength=len(X)), 1)
+        side[twins] = np.where(mid[twins] > X[twins, -1], 1.0, 0.0)
     return np.column_stack([region.X, side * 1e3])
 
 
@@ -106,14 +112,8 @@ class Growth:
     (each conversion's time, half width, energy and momentum jumps) and the ledger's offsets."""
 
     def __init__(self, study, p: dict, dem: str, built, sim):
-        from . import assemble, bonded
         self.study, self.p, self.dem = study, p, dem
-        bb = built.bonded
-        self.d, self.H = built.t, built.lam.thickness if bb is None else bb.depth
-        self.plane = p["geometry.shape"] == "plate"  # a square zone about the centre, not a strip along x
-        self.limit = bonded.grow_limit(p, bb) if bb is not None else \
-            assemble.plate_grow_limit(p, built) if self.plane else assemble.grow_limit(p, built)
-        self.margin = p["zone.margin"] or max(4 * self.d, self.H)
+        self.d, self.limit, self.margin = self._extent(built)
         self.grow_at = p["zone.grow_at"]
         self.half_width = float(built.lattice.x[:, 0].max())
         self.events: list[tuple[float, float, float, float]] = []  # (t s, half width m, dE / E, |dP| / |P|)
@@ -126,6 +126,22 @@ class Growth:
         self.engine_start: tuple[np.ndarray, np.ndarray] | None = None
         self._bind(sim, built)
 
+    # a quarter's symmetry planes (x = 0; in 3D also y = 0) hold their normal velocity
+    symmetric = True
+    plane = False  # a plate's square zone (the distance from the centre is max(|x|, |y|))
+    limit_name = "zone.grow_to"
+    reach_name = "the contact patch"  # what contact_reach measures
+
+    def _extent(self, built) -> tuple[float, float, float]:
+        """(particle spacing, the zone's growth limit, its margin) m."""
+        from . import assemble, bonded
+        p, bb = self.p, built.bonded
+        H = built.lam.thickness if bb is None else bb.depth
+        self.plane = p["geometry.shape"] == "plate"  # a square zone about the centre, not a strip along x
+        limit = bonded.grow_limit(p, bb) if bb is not None else \
+            assemble.plate_grow_limit(p, built) if self.plane else assemble.grow_limit(p, built)
+        return built.t, limit, p["zone.margin"] or max(4 * built.t, H)
+
     # -- the current model ---------------------------------------------------------------------
     def _bind(self, sim, built) -> None:
         self.sim, self.built = sim, built
@@ -136,15 +152,29 @@ class Growth:
         energies = sim.energies
         sim.energies = lambda: {k: v + self.offset.get(k, 0.0) for k, v in energies().items()}
         region = built.dyn.region
-        if built.bonded is None:
-            self._indices, self._criteria = FemIndices(region, built.lam, built.dim), criteria(self.p, built)
-        else:  # the body's Hoffman, the adhesive's interlaminar index on the bottom row
-            self._indices, self._criteria = BondedIndices(region, built.bonded, built.dim), ["Hoffman", "interlaminar"]
+        self._bind_criteria(built)
         X = region.X[region.mesh.t.T]  # (nel, nodes, dim)
         # each element's nearest and farthest distance from the centre: along x, or max(x, y) (a square)
         self._x0, self._x1 = X[:, :, 0].min(axis=1), X[:, :, 0].max(axis=1)
         if self.plane:
             self._x0, self._x1 = np.maximum(self._x0, X[:, :, 1].min(axis=1)), np.maximum(self._x1, X[:, :, 1].max(axis=1))
+
+    def snap(self, x: float) -> float:
+        """m, the first edge a zone may have at or beyond x: whole particle spacings."""
+        return float(np.ceil(x / self.d - 1e-9) * self.d)
+
+    def _bind_criteria(self, built) -> None:
+        region = built.dyn.region
+        if built.bonded is None:
+            self._indices, self._criteria = FemIndices(region, built.lam, built.dim), criteria(self.p, built)
+        else:  # the body's Hoffman, the adhesive's interlaminar index on the bottom row
+            self._indices, self._criteria = BondedIndices(region, built.bonded, built.dim), ["Hoffman", "interlaminar"]
+
+    def index(self, u: np.ndarray) -> np.ndarray:
+        """(nel,) the far field's failure index that decides growth, at FEM displacement u."""
+        hashin, hoffman = self._indices(self.built.dyn.region.centroid_strain_stress(u)[0])
+        return np.maximum(hoffman if "Hoffman" in self._criteria else 0.0,
+                          hashin if "interlaminar" in self._criteria else 0.0)
 
     def _p(self, half_width: float) -> dict:
         """The parameters of the zone at ``half_width``, at the run's own step and substeps."""
@@ -182,9 +212,7 @@ class Growth:
         sample, else None: an element within the margin of the zone's edge at grow_at, or a
         contact patch closer than the margin to the edge."""
         clock = self.built.clock
-        hashin, hoffman = self._indices(self.built.dyn.region.centroid_strain_stress(clock.u_snapshot)[0])
-        index = np.maximum(hoffman if "Hoffman" in self._criteria else 0.0,
-                           hashin if "interlaminar" in self._criteria else 0.0)
+        index = self.index(clock.u_snapshot)
         flagged = index >= self.grow_at
         w = self.half_width
         reach = grown_reach(self._x0[flagged], self._x1[flagged], w, self.margin)
@@ -193,13 +221,13 @@ class Growth:
         if reach <= w * (1 + 1e-9) and not near:
             return None
         reach = max(reach, contact)
-        target = min(np.ceil((reach + self.margin) / self.d - 1e-9) * self.d, self.limit)
+        target = min(self.snap(reach + self.margin), self.limit)
         if target <= w * (1 + 1e-9):
             if not self.limit_warning:
                 self.limit_warning = (
                     f"zone.grow: at t = {clock.t_snapshot:.4g} s the far field (index {index.max(initial=0.0):.2f}) or "
-                    f"the contact patch ({contact * 1e3:.3g} mm) asks for the zone out to x = "
-                    f"{(reach + self.margin) * 1e3:.4g} mm, beyond zone.grow_to = {self.limit * 1e3:.4g} mm: the zone "
+                    f"{self.reach_name} ({contact * 1e3:.3g} mm) asks for the zone out to x = "
+                    f"{(reach + self.margin) * 1e3:.4g} mm, beyond {self.limit_name} = {self.limit * 1e3:.4g} mm: the zone "
                     "grows no further")
                 self.sim.warnings.append(self.limit_warning)
             return None
@@ -211,7 +239,7 @@ class Growth:
         old_sim, old = self.sim, self.built
         old_sim.sync() if old_sim.sync is not None else None
         before = old_sim.energies()
-        transfer = _Transfer(old, old.clock.momentum_snapshot)
+        transfer = _Transfer(old, old.clock.momentum_snapshot, self.symmetric)
         # the old engine closed first: YADE runs one scene per process
         old_sim.close()
         sim, built = self._assemble(half_width, transfer, error=RuntimeError)
@@ -298,8 +326,9 @@ class _Transfer:
     """The state of the old model at its last FEM step, handed to the grown zone's model as it
     is built (coupled_simulation's ``start``)."""
 
-    def __init__(self, old, momentum: np.ndarray):
+    def __init__(self, old, momentum: np.ndarray, symmetric: bool = True):
         clock, backend = old.clock, old.backend
+        self.symmetric = symmetric
         region = old.dyn.region
         self.old, self.momentum = old, np.array(momentum, float)
         self.region, self.pairs = region, old.fem_pairs
@@ -341,7 +370,7 @@ class _Transfer:
         v[ids, :dim] = W @ self.v
         # the symmetry planes (x = 0; in 3D also y = 0) hold their normal component from the
         # engine's start (coupled_simulation's hold): none there, and none given there below
-        on_plane = np.abs(scene.x[:, : dim - 1]) < tol  # (n, planes)
+        on_plane = (np.abs(scene.x[:, : dim - 1]) < tol) & self.symmetric  # (n, planes)
         v[:, : dim - 1][on_plane] = 0.0
         self._carry_models(models, was, x)
         # momentum: the converted (now free) particles take up what the new split of the mass changed
