@@ -95,8 +95,9 @@ def growing(p: dict, dem: str, x_a: float, model) -> "object":
     x0 = start_end(p, x_a)
     limit = x0 + np.floor((L - 4 * h - x0) / e + 1e-9) * e
     if limit < x0:
-        raise CaseError(f"dem.window_end = {x0:.4g}: the growing window starts beyond geometry.length - 4 h = "
-                        f"{L - 4 * h:.4g} m; allowed: a shorter zone.margin or dem.window_end, or a longer specimen")
+        key = "dem.window_end" if p["dem.window_end"] else "zone.margin"
+        raise CaseError(f"{key} = {p[key]:g}: the growing window would start at x = {x0:.4g} m, beyond "
+                        f"geometry.length - 4 h = {L - 4 * h:.4g} m; allowed: a smaller {key}, or a longer specimen")
     reserve = (x0, float(limit), e)
 
     def make(x_b: float, q: dict, start=None):

@@ -1,0 +1,229 @@
+"""The delamination specimens' DEM windows that grow ahead of the crack (zone.grow on dcb, enf,
+mixed_mode; coupling/scenes/window_growth.py, issue #25).
+
+Against the window that holds the whole crack path from t = 0 (dem.window_end at the grown
+window's end): the same closed-form qoi within 1 %, the crack as far within one particle
+spacing; at every sample no damage at the window's edge; momentum to round-off at every
+conversion; a run resumed after a conversion finishes as the uninterrupted one, bit for bit;
+anywhere in the specimens' documented ranges the grown window keeps the crack's cohesive zone
+inside it and the closed forms hold (hypothesis).
+"""
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from conftest import assert_checks
+from test_delamination_ranges import (BENDING_LOAD, COARSE, DCB_LOAD, MATERIAL, RADIUS, THICK, WIDE, bending_sets,
+                                      dcb_sets)
+
+from coupling.case import load_case
+from coupling.params import CaseError
+from coupling.scenes import dcb, window_growth
+from coupling.simulation import run_clock
+
+GROW = "--set=zone.grow=true"
+# the qoi a grown window must give as the whole crack path's window: the closed forms' and the crack's
+QOI = {"dcb_coarse": ("peak_load", "dissipated_energy_ratio"),
+       "enf_coarse": ("peak_load", "dissipated_energy_ratio"),
+       "mixed_mode_coarse": ("peak_load", "dissipated_energy_ratio")}
+
+
+def _run(femdem, case: str, *sets: str):
+    code, s, err = femdem("run", case, *sets)
+    assert code == 0, (err, s and s["message"])
+    return s
+
+
+@pytest.mark.parametrize("case", ["dcb_coarse", "enf_coarse", pytest.param("mixed_mode_coarse", marks=pytest.mark.slow)])
+def test_a_grown_window_answers_as_the_whole_crack_path_s(femdem, case):
+    """Grown from a0 + 4 h, against the window fixed from t = 0 at the grown one's end: the peak
+    load and the dissipation per crack area within 1 %, the crack's growth within one spacing;
+    no damage at the edge at any sample; momentum to round-off at each conversion."""
+    grown = _run(femdem, case, GROW)
+    q = grown["qoi"]
+    assert q["zone_conversions"] >= 1
+    assert q["damage_at_zone_edge"] == 0.0
+    assert q["zone_conversion_momentum_jump"] < 1e-12
+    fixed = _run(femdem, case, f"--set=dem.window_end={q['zone_grown_half_width']!r}")
+    assert "zone_conversions" not in fixed["qoi"]
+    for key in QOI[case]:
+        assert abs(q[key] / fixed["qoi"][key] - 1) < 0.01, key
+    d = grown["parameters"]["zone.particle_size"]
+    assert abs(q["crack_growth"] - fixed["qoi"]["crack_growth"]) <= d * (1 + 1e-9)
+    assert_checks(grown)
+
+
+def _model(case: str, sets: dict, dem: str = "liggghts"):
+    c = load_case(case, sets)
+    return c, c.scene.build(c.parameters, "coupled", dem)
+
+
+def test_a_conversion_keeps_momentum_and_the_window_only_grows_by_mesh_lines():
+    """In process (dcb_coarse): each conversion's momentum equals the old model's (round-off),
+    the window's end steps forward by whole lines of the band's reserve mesh and never past its
+    limit, the grown model's FEM is the old one less the band's elements it took (every node
+    kept), and the particles' total mass is the band's it replaced plus the tied rows'."""
+    c, sim = _model("dcb_coarse", {"zone.grow": True, "clock.t_end": 1.6e-3})
+    p = c.parameters
+    growth = sim.growth
+    x0, limit, e = growth._reserve
+    ends, nodes, masses = [growth.half_width], [], []
+    original = growth.convert
+
+    def convert(x_b, step):
+        old = growth.built
+        nodes.append(old.dyn.region.n_nodes)
+        new = original(x_b, step)
+        ends.append(growth.half_width)
+        masses.append((old.lattice.mass.sum(), growth.built.lattice.mass.sum(), old.dyn.region.n_elements,
+                       growth.built.dyn.region.n_elements))
+        return new
+
+    growth.convert = convert
+    try:
+        result = run_clock(sim)
+    finally:
+        result["simulation"].close() if "result" in locals() else sim.close()
+    assert len(ends) >= 2
+    steps = np.diff(ends) / e
+    assert np.all(steps >= 1 - 1e-9) and np.allclose(steps, np.round(steps))
+    assert ends[0] == pytest.approx(x0) and ends[-1] <= limit * (1 + 1e-12)
+    assert np.all(np.abs(growth.history()["zone.conversion_momentum_jump"]) < 1e-12)
+    d, t, rho = p["zone.particle_size"], p["zone.particle_size"], p["material.rho"]
+    for (m_old, m_new, nel_old, nel_new), x_from, x_to in zip(masses, ends[:-1], ends[1:]):
+        cols = round((x_to - x_from) / d)
+        # four rows per new column, each particle the mass of a d x d x t cell
+        assert m_new - m_old == pytest.approx(4 * cols * rho * d * d * t, rel=1e-9)
+        # the band's two element rows over the grown length, of e along
+        assert nel_old - nel_new == 2 * round((x_to - x_from) / e)
+
+
+def test_law_springs_give_the_engine_springs_results():
+    """A fixed window whose lattice springs are law bonds (as a growing window's) against the
+    same window with the engine's springs: the peak load and the initial compliance within
+    0.2 % (only the band's mesh ahead of the window differs)."""
+    c = load_case("dcb_coarse", {"clock.t_end": 1.3e-3})
+    p = c.parameters
+    (x_a, _), _ = dcb.domain(p, "coupled")
+    x_b = window_growth.start_end(p, x_a) + 4 * p["zone.particle_size"]
+    reserve = (window_growth.start_end(p, x_a), p["geometry.length"] - 4 * p["geometry.arm_thickness"],
+               2 * p["zone.particle_size"])
+    runs = []
+    for r in (None, reserve):
+        sim, spec = dcb.model(p, "coupled", "liggghts", x_a, x_b, r)
+        assert (spec.springs is not None) == (r is not None)
+        try:
+            runs.append(run_clock(sim)["history"])
+        finally:
+            sim.close()
+    (qa, _), (qb, _) = (dcb.evaluate(p, h, "coupled") for h in runs)
+    assert qa["peak_load"] > 0
+    for key in ("peak_load", "initial_compliance"):
+        assert abs(qb[key] / qa[key] - 1) < 2e-3, key
+
+
+def test_a_window_resumed_after_a_conversion_finishes_as_the_uninterrupted_one(tmp_path):
+    """dcb_coarse, checkpoint at 60 % of the run (after the first conversion): the resumed run
+    rebuilds the grown window and its history equals the uninterrupted run's, bit for bit."""
+    from coupling import checkpoint
+    sets = {"zone.grow": True, "clock.t_end": 1.5e-3}
+
+    def run(**kw):
+        _, sim = _model("dcb_coarse", sets)
+        if "run_dir" in kw:
+            kw["checkpoint_every"] = int(0.6 * sim.n_steps)
+        result = None
+        try:
+            result = run_clock(sim, **kw)
+            return result, result["simulation"].growth
+        finally:
+            (result["simulation"] if result else sim).close()
+
+    straight, growth = run(run_dir=tmp_path)
+    ck = checkpoint.latest(tmp_path)
+    assert growth.events and growth.events[0][0] < checkpoint.step_of(ck) * growth.sim.dt
+    assert checkpoint.read(ck)["loop"]["growth"]["half_width"] > growth.events[0][1] - 1e-12
+    resumed, _ = run(resume_from=ck)
+    for k, v in straight["history"].items():
+        assert np.array_equal(v, resumed["history"][k], equal_nan=True), k
+
+
+@pytest.mark.parametrize("sets, key", [
+    ({"coupling.tie": "penalty"}, "coupling.tie"),
+    ({"dem.window_end": 0.07}, "dem.window_end"),
+    ({"zone.margin": 0.05}, "zone.margin"),
+])
+def test_bad_window_growth_settings_are_refused(femdem, sets, key):
+    code, _, err = femdem("run", "dcb_coarse", GROW, *[f"--set={k}={v}" for k, v in sets.items()])
+    assert code == 2 and key in err, err
+
+
+def _follows(femdem, case: str, sets: list[str]) -> None:
+    """A grown window anywhere in the ranges: its closed-form checks hold (the run said before it
+    started whether they apply), no damage ever at its edge, momentum to round-off."""
+    from test_delamination_ranges import OUTSIDE
+    from coupling.params import parse_set
+    from hypothesis import assume
+    overrides = parse_set([a.split("=", 1)[1] for a in sets if a.startswith("--set=")])
+    try:
+        c = load_case(case, overrides)
+        warnings = c.scene.validity(c.parameters, "coupled")
+    except CaseError:
+        assume(False)
+    assume(not any(key in w for w in warnings for key in OUTSIDE))
+    s = _run(femdem, case, *sets, GROW)
+    q = s["qoi"]
+    assert q["damage_at_zone_edge"] == 0.0
+    assert q["zone_conversion_momentum_jump"] < 1e-12
+    if not any("grows no further" in w for w in s["warnings"]):
+        # the window ends beyond the crack's tip by its lead at least, less one mesh line
+        lead = window_growth.lead(s["parameters"])
+        tip = s["parameters"]["geometry.crack_length"] + q["crack_growth"]
+        assert q["zone_grown_half_width"] >= tip + lead - 2 * s["parameters"]["zone.particle_size"] - 1e-9
+    assert_checks(s)
+
+
+@COARSE
+@given(m=MATERIAL, h=THICK, a_rel=st.floats(1.0, 1.6), substeps=st.sampled_from([0, 1, 2]), r=RADIUS, **DCB_LOAD)
+def test_a_dcb_window_follows_the_crack_anywhere_in_its_ranges(femdem, m, h, a_rel, substeps, r, pace, opening,
+                                                                length):
+    _follows(femdem, "dcb_coarse", dcb_sets(m, h, a_rel, substeps, r, pace, opening, length))
+
+
+@pytest.mark.slow
+@WIDE
+@given(m=MATERIAL, h=THICK, a_rel=st.floats(1.0, 1.6), substeps=st.sampled_from([0, 1, 2]), r=RADIUS, **DCB_LOAD)
+def test_a_dcb_window_follows_the_crack_anywhere_in_its_ranges_wider(femdem, m, h, a_rel, substeps, r, pace,
+                                                                      opening, length):
+    _follows(femdem, "dcb_coarse", dcb_sets(m, h, a_rel, substeps, r, pace, opening, length))
+
+
+@pytest.mark.slow
+@WIDE
+@given(case=st.sampled_from(["enf_coarse", "mixed_mode_coarse"]), m=MATERIAL, h=THICK, L_rel=st.floats(1.2, 2.0),
+       a_rel=st.floats(0.4, 0.6), substeps=st.sampled_from([0, 1, 2]), r=RADIUS, **BENDING_LOAD)
+def test_a_bending_window_follows_the_crack_anywhere_in_its_ranges(femdem, case, m, h, L_rel, a_rel, substeps, r,
+                                                                    pace, overhang, deflection):
+    _follows(femdem, case, bending_sets(m, h, L_rel, a_rel, substeps, r, pace, overhang, deflection))
+
+
+@COARSE
+@given(m=MATERIAL, h=THICK, L_rel=st.floats(1.2, 2.0), a_rel=st.floats(0.4, 0.6), substeps=st.sampled_from([0, 1, 2]),
+       r=RADIUS, **BENDING_LOAD)
+def test_an_enf_window_follows_the_crack_anywhere_in_its_ranges(femdem, m, h, L_rel, a_rel, substeps, r, pace,
+                                                                 overhang, deflection):
+    _follows(femdem, "enf_coarse", bending_sets(m, h, L_rel, a_rel, substeps, r, pace, overhang, deflection))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("engine", ["yade", "lammps"])
+def test_a_window_grows_on_every_engine(femdem, engine):
+    """The same grown dcb_coarse on YADE and LAMMPS (LIGGGHTS in the tests above): the peak load
+    within 0.5 % of LIGGGHTS's, the same conversions, momentum to round-off."""
+    ref = _run(femdem, "dcb_coarse", GROW, "--dem", "liggghts")["qoi"]
+    q = _run(femdem, "dcb_coarse", GROW, "--dem", engine)["qoi"]
+    assert q["zone_conversions"] == ref["zone_conversions"]
+    assert q["zone_grown_half_width"] == pytest.approx(ref["zone_grown_half_width"])
+    assert q["damage_at_zone_edge"] == 0.0 and q["zone_conversion_momentum_jump"] < 1e-12
+    assert abs(q["peak_load"] / ref["peak_load"] - 1) < 5e-3
