@@ -23,7 +23,8 @@ from coupling.case import load_case
 from coupling.params import CaseError, parse_set
 from coupling.scenes import dcb, enf
 
-OUTSIDE = ("does not apply", "fewer than")  # the scene's warnings that the closed form does not hold
+# the scene's warnings that the closed form does not hold (the DCB's says "loads (LEFM) do not apply")
+OUTSIDE = ("does not apply", "do not apply", "fewer than")
 
 # plies from glass/epoxy to high-modulus carbon/epoxy, and every other constant of the ply, the
 # interface and the loading (the parameters' documented ranges: `femdem params dcb_coarse`)

@@ -509,6 +509,14 @@ def cohesive_zone_qoi(p: dict, h: dict, k: int, Gc: float, tau: float, mode: str
     return out
 
 
+def plot_crack_and_window(ax, along: np.ndarray, h: dict) -> None:
+    """The crack tip against ``along`` (the loading's measure), and a growing window's end."""
+    ax.plot(along, 1e3 * np.asarray(h["crack_tip"]), label="crack tip")
+    if "zone_half_width" in h:  # zone.grow: the DEM window's end as it grew
+        ax.step(along, 1e3 * np.asarray(h["zone_half_width"]), where="post", label="DEM window's end")
+        ax.legend()
+
+
 def peak_before_growth(P: np.ndarray, tip: np.ndarray, a0: float, run: float) -> int:
     """Index of the largest load before the crack has run ``run`` m beyond a0 (the dynamic
     ringing after an unstable jump is not a peak of the quasi-static response)."""
