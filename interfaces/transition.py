@@ -44,10 +44,7 @@ class TransitionInterface:
             raise InterfaceError("interface band has no particles")
         pts = x[ids, : region.dim].T
         basis = skfem.Basis(region.mesh, region.etype.element_cls())
-        try:
-            W = basis.probes(pts).tocsr()
-        except ValueError:  # some point is outside every element, or on the boundary by round-off
-            W = sp.vstack([cls._host_one(basis, region, pts[:, i], ids[i], tol) for i in range(pts.shape[1])]).tocsr()
+        W = cls._host(basis, region, pts, ids, tol).tocsr()
         W.eliminate_zeros()
         rows = np.asarray(W.sum(axis=1)).ravel()
         bad = np.flatnonzero(np.abs(rows - 1.0) > tol)
@@ -56,6 +53,20 @@ class TransitionInterface:
             raise InterfaceError(f"interface particle {p} at {x[p]} has weights summing to {rows[bad[0]]:.6g}, not 1 "
                                  "(no FEM element hosts it)")
         return cls(ids, W, region.dim)
+
+    @classmethod
+    def _host(cls, basis, region: FemRegion, pts: np.ndarray, ids: np.ndarray, tol: float) -> sp.spmatrix:
+        """Weights (k, n_nodes) of points pts (dim, k): all at once; when the element finder
+        rejects some point (on the mesh boundary by round-off), each half again, so that only
+        the rejected points are hosted one by one (_host_one)."""
+        try:
+            return basis.probes(pts)
+        except ValueError:
+            if pts.shape[1] == 1:
+                return cls._host_one(basis, region, pts[:, 0], ids[0], tol)
+        h = pts.shape[1] // 2
+        return sp.vstack([cls._host(basis, region, pts[:, :h], ids[:h], tol),
+                          cls._host(basis, region, pts[:, h:], ids[h:], tol)])
 
     @staticmethod
     def _host_one(basis, region: FemRegion, pt: np.ndarray, pid: int, tol: float) -> sp.csr_matrix:

@@ -110,6 +110,27 @@ def test_a_particle_on_the_edge_of_a_hole_is_hosted(eps):
     assert itf.to_particles(r.X)[0, :2] == pytest.approx([1.0, 0.2], abs=1e-8)
 
 
+@settings(max_examples=15, deadline=None, derandomize=True)
+@given(n_in=st.integers(0, 30), n_edge=st.integers(1, 6), eps=st.sampled_from([0.0, 1e-15, 1e-12]),
+       seed=st.integers(0, 2**31))
+def test_particles_on_the_hole_s_edge_among_others_are_hosted_as_one_by_one(n_in, n_edge, eps, seed):
+    """Particles inside the mesh mixed with ones on the edge of its hole (outside by round-off,
+    which the element finder rejects): the weights of the whole set equal those of each
+    particle hosted on its own, row for row (only the rejected ones are hosted one by one)."""
+    from fem_region import mesh
+    rng = np.random.default_rng(seed)
+    m = mesh.cut_rectangle([0, 0.5, 1, 1.5, 2], [0, 0.1, 0.6, 1.1], lambda cx, cy: not (cx < 1 and cy > 0.1))
+    r = FemRegion(m, ELEMENTS["quad4"], materials.plane_strain(materials.isotropic(1e9, 0.3)), 1000.0, 1.0)
+    inside = np.column_stack([rng.uniform(1.02, 1.98, n_in), rng.uniform(0.02, 1.08, n_in), np.zeros(n_in)])
+    edge = np.column_stack([np.full(n_edge, 1 - eps), rng.uniform(0.15, 1.05, n_edge), np.zeros(n_edge)])
+    x = rng.permutation(np.vstack([inside, edge]))
+    W = TransitionInterface.build(r, x, np.arange(len(x))).W.toarray()
+    for i in range(len(x)):
+        one = TransitionInterface.build(r, x[i:i + 1], np.arange(1)).W.toarray()[0]
+        np.testing.assert_allclose(W[i], one, rtol=0, atol=1e-12)
+    assert np.allclose(W @ r.X, x[:, :2], atol=1e-8)
+
+
 def test_coupled_free_flight_momentum(femdem):
     code, s, _ = femdem("run", "coupled_free_flight")
     assert code == 0
