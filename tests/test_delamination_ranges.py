@@ -282,7 +282,7 @@ def test_a_dcb_is_refused_unless_its_crack_runs_far_enough_to_measure(m, h, a_re
     theory's final crack runs less than its cohesive zone and 6 bonds beyond a0, and accepted
     at that smallest opening (the refusal's own bound is consistent with the rule)."""
     from coupling.scenes import delamination as dl
-    sets = dcb_sets(m, h, a_rel, 0, 0.25e-3, pace=4.0, opening=opening, length=0.3)
+    sets = dcb_sets(m, h, a_rel, 0, 0.25e-3, pace=5.0, opening=opening, length=0.3)
     p = load_case("dcb_coarse", parse_set([a.split("=", 1)[1] for a in sets])).parameters
     d = p["zone.particle_size"]
     try:

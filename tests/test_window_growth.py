@@ -6,7 +6,7 @@ window's end): the same closed-form qoi within 1 %, the crack as far within one 
 spacing; at every sample no damage at the window's edge; momentum to round-off at every
 conversion; a run resumed after a conversion finishes as the uninterrupted one, bit for bit;
 anywhere in the specimens' documented ranges the grown window keeps the crack's cohesive zone
-inside it and the closed forms hold (hypothesis).
+inside it and answers as the closed form's window (hypothesis).
 """
 import numpy as np
 import pytest
@@ -159,9 +159,17 @@ def test_bad_window_growth_settings_are_refused(femdem, sets, key):
     assert code == 2 and key in err, err
 
 
+# what a grown window must give as the closed form's window anywhere in the ranges (the ENF's
+# closed-form window is reached by its crack, docs/limits.md: its dissipation is that window's)
+FOLLOWS = {"dcb_coarse": ("peak_load", "dissipated_energy_ratio"), "enf_coarse": ("peak_load",),
+           "mixed_mode_coarse": ("peak_load", "dissipated_energy_ratio")}
+
+
 def _follows(femdem, case: str, sets: list[str]) -> None:
-    """A grown window anywhere in the ranges: its closed-form checks hold (the run said before it
-    started whether they apply), no damage ever at its edge, momentum to round-off."""
+    """A grown window anywhere in the ranges against the closed form's window on the same
+    draw: the qoi FOLLOWS within 1 %, every check the closed form's window passes passes, no
+    damage ever at the grown window's edge, the window ahead of the crack tip by its lead (or
+    at its limit), momentum to round-off."""
     from test_delamination_ranges import OUTSIDE
     from coupling.params import parse_set
     from hypothesis import assume
@@ -177,11 +185,14 @@ def _follows(femdem, case: str, sets: list[str]) -> None:
     assert q["damage_at_zone_edge"] == 0.0
     assert q["zone_conversion_momentum_jump"] < 1e-12
     if not any("grows no further" in w for w in s["warnings"]):
-        # the window ends beyond the crack's tip by its lead at least, less one mesh line
         lead = window_growth.lead(s["parameters"])
         tip = s["parameters"]["geometry.crack_length"] + q["crack_growth"]
         assert q["zone_grown_half_width"] >= tip + lead - 2 * s["parameters"]["zone.particle_size"] - 1e-9
-    assert_checks(s)
+    placed = _run(femdem, case, *sets)
+    for key in FOLLOWS[case]:
+        assert abs(q[key] / placed["qoi"][key] - 1) < 0.01, (key, q[key], placed["qoi"][key])
+    for name, check in placed["checks"].items():
+        assert s["checks"][name]["passed"] or not check["passed"], (name, s["checks"][name])
 
 
 @COARSE
