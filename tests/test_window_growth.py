@@ -159,6 +159,16 @@ def test_bad_window_growth_settings_are_refused(femdem, sets, key):
     assert code == 2 and key in err, err
 
 
+@pytest.mark.parametrize("case, end", [("dcb_coarse", 0.025), ("dcb_coarse", 0.07), ("enf_coarse", 0.02),
+                                       ("enf_coarse", 0.1)])
+def test_a_window_end_off_the_crack_s_path_is_refused(femdem, case, end):
+    """dem.window_end before the initial crack tip or past geometry.length - 4 h: one line
+    naming the key and the range, grown or not."""
+    for extra in ([], [GROW]):
+        code, _, err = femdem("run", case, f"--set=dem.window_end={end}", *extra)
+        assert code == 2 and err.startswith("femdem: dem.window_end = ") and err.count("\n") == 1, err
+
+
 # what a grown window must give as the closed form's window anywhere in the ranges (the ENF's
 # closed-form window is reached by its crack, docs/limits.md: its dissipation is that window's)
 FOLLOWS = {"dcb_coarse": ("peak_load", "dissipated_energy_ratio"), "enf_coarse": ("peak_load",),

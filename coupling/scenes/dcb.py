@@ -154,7 +154,7 @@ def build(p: dict, mode: str, dem: str):
         sim = window_growth.growing(p, dem, x_a, lambda q, x_b, reserve, start: model(q, mode, dem, x_a, x_b,
                                                                                       reserve, start))
     else:
-        sim, _ = model(p, mode, dem, x_a, p["dem.window_end"] or x_b)
+        sim, _ = model(p, mode, dem, x_a, window_growth.window_end(p, x_b))
     sim.warnings += warnings
     return sim
 

@@ -128,7 +128,7 @@ def bending_specimen(p: dict, mode: str, dem: str, cf: dict, single_leg: bool, w
         sim = window_growth.growing(p, dem, 0.0, lambda q, x_b, reserve, start: bending_model(
             q, mode, dem, cf, single_leg, x_b, reserve, start), load_lines=(p["geometry.half_span"],))
     else:
-        x_b = p["dem.window_end"] or p["geometry.half_span"] + p["dem.margin"]
+        x_b = window_growth.window_end(p, p["geometry.half_span"] + p["dem.margin"])
         sim = bending_model(p, mode, dem, cf, single_leg, x_b)[0]
     sim.warnings += warnings
     return sim

@@ -75,6 +75,18 @@ def lead(p: dict) -> float:
     return p["zone.margin"] or 4 * p["geometry.arm_thickness"]
 
 
+def window_end(p: dict, placed: float) -> float:
+    """m, a fixed window's end: dem.window_end, refused (CaseError) unless beyond the initial
+    crack tip and at most geometry.length - 4 h, or ``placed`` (the closed form's) when 0."""
+    x_b = p["dem.window_end"]
+    a0, limit = p["geometry.crack_length"], p["geometry.length"] - 4 * p["geometry.arm_thickness"]
+    if x_b and not a0 < x_b <= limit * (1 + 1e-12):
+        raise CaseError(f"dem.window_end = {x_b:g}: the DEM window must end beyond the initial crack tip and "
+                        f"before the specimen's root; allowed {a0:.4g} < x <= geometry.length - 4 h = {limit:.4g} m, "
+                        "or 0 (the closed form's)")
+    return x_b or placed
+
+
 def start_end(p: dict, x_a: float, load_lines: tuple[float, ...] = ()) -> float:
     """m, the growing window's first end: dem.window_end, or the lead beyond the initial crack
     tip a0 and beyond the load lines ahead of it (x m: a bending specimen's punch, on the
@@ -82,7 +94,7 @@ def start_end(p: dict, x_a: float, load_lines: tuple[float, ...] = ()) -> float:
     the peak load: enf_coarse at E11 = 40 GPa, h = 4 mm, the window ending 3 mm short of the
     load line read 2.0 % above the one 4 mm past it, 24 mm past it 0.16 % below."""
     d, a0 = p["zone.particle_size"], p["geometry.crack_length"]
-    x_b = p["dem.window_end"] or max([a0] + [x for x in load_lines if x > a0]) + lead(p)
+    x_b = window_end(p, max([a0] + [x for x in load_lines if x > a0]) + lead(p))
     return x_a + np.ceil((x_b - x_a) / d - 1e-9) * d
 
 
