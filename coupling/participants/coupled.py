@@ -31,7 +31,8 @@ COUPLING: dict[str, Param] = {
 
 def coupled_simulation(p: dict, make_fem: Callable[[np.ndarray | None], ExplicitDynamics], scene: DemScene,
                        dem: str, t_end_default: float, history_every: int = 0, steps: int = 0, models: tuple = (),
-                       start: Callable | None = None, hold: Callable | None = None):
+                       start: Callable | None = None, hold: Callable | None = None, engine=None,
+                       engine_scene: DemScene | None = None):
     """(Simulation, CoupledClock) for a FEM far field made by ``make_fem(None)`` and a
     DEM ``scene`` whose group "interface" is slaved to the FEM. steps: FEM steps (default
     from t_end); history_every: FEM steps between samples (default from output.history_every);
@@ -41,10 +42,18 @@ def coupled_simulation(p: dict, make_fem: Callable[[np.ndarray | None], Explicit
     from (the particles' current positions and velocities; ``scene`` keeps the reference ones);
     hold: called with the engine once it is built and tied, before it starts (a quarter's
     symmetry planes: held from its first evaluation, which a grown zone's model makes with the
-    particles in motion)."""
+    particles in motion).
+    Seeded particles (``scene.groups["dormant"]``: a growing zone's reserve, in the engine from
+    the start) are slaved to the FEM as the interface's are, but carry none of the model's mass
+    (the FEM's elements do) and no force (no law bond reaches them); engine_scene: the scene the
+    engine is built with when its masses differ (a seeded particle's own, for when it is
+    released); engine: an engine already running those particles, continued on (a seeded zone
+    grown: ``start`` then writes its state into it and returns None)."""
     fem = make_fem(None)  # built once; the tie's node masses are added below
+    dormant = scene.groups.get("dormant", np.zeros(0, int))
     try:
-        itf = TransitionInterface.build(fem.region, scene.x, scene.groups.get("interface", np.zeros(0, int)))
+        itf = TransitionInterface.build(fem.region, scene.x, np.concatenate(
+            [scene.groups.get("interface", np.zeros(0, int)), dormant]).astype(int))
     except InterfaceError as exc:
         raise CaseError(f"interface: {exc}") from None
     if p["coupling.tie"] == "kinematic":
@@ -52,8 +61,13 @@ def coupled_simulation(p: dict, make_fem: Callable[[np.ndarray | None], Explicit
             # the FEM carries the band's stiffness (placeholder bonds carry none and must
             # stay: without them an engine adds contact between overlapping law pairs)
             scene = scene.without_bonds_within(itf.ids)
-        fem.add_nodal_mass(itf.share_mass(scene.mass[itf.ids]))  # slaved particles move with the nodes
-    engine_scene = start(fem, scene, itf, models) if start is not None else scene
+        carried = scene.mass.copy()
+        carried[dormant] = 0.0
+        fem.add_nodal_mass(itf.share_mass(carried[itf.ids]))  # slaved particles move with the nodes
+    engine_scene = scene if engine_scene is None else engine_scene
+    engine_scene = start(fem, engine_scene, itf, models) if start is not None else engine_scene
+    if engine is not None:
+        return _assemble(p, fem, itf, scene, engine, dem, t_end_default, history_every, steps, models, None, None)
     try:  # the engine last, so a bad interface never leaves an engine or worker behind
         backend = make_backend(dem, p["dem.process"], p["dem.ranks"])
     except EngineUnavailable as exc:
@@ -70,7 +84,8 @@ def coupled_simulation(p: dict, make_fem: Callable[[np.ndarray | None], Explicit
 
 
 def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, steps, models, engine_scene, hold):
-    backend.build(engine_scene)
+    if engine_scene is not None:  # (None: an engine already running, its planes held)
+        backend.build(engine_scene)
     if p["coupling.tie"] == "kinematic":
         tie = KinematicTie(itf, backend, scene.mass)
     else:

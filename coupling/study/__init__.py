@@ -181,7 +181,7 @@ class Study:
             raise CaseError(f"[impactors.NAME] or [loads.NAME]: a {shape} takes exactly one, on its top face's "
                             f"centre; given {len(names['impactors']) + len(names['loads'])}")
         if shape not in growing:  # a zone grown during the run: the beams', bonded beams' and plates' so far
-            for key in ("grow", "grow_to"):
+            for key in ("grow", "grow_to", "conversion"):
                 if given("zone", key):
                     raise CaseError(f"zone.{key}: a zone grown during the run is built for the beams and bonded beams "
                                     f"(geometry.shape = {', '.join(repr(s) for s in growing)}) so far; allowed for "
@@ -285,6 +285,9 @@ class Study:
         """(Simulation, Built) of ``p``: the participants, the probes and the fields."""
         assemble = {"plate": plate, "disc": disc, "bonded_beam": bonded_beam, "bonded_beam_3d": bonded_beam,
                     "panel": assemble_panel, "block": block}
+        if p.get("zone.conversion") == "release" and not (p.get("zone.grow") and p["geometry.shape"] == "beam"):
+            raise CaseError("zone.conversion = 'release': seeded particles are built for a growing zone (zone.grow = "
+                            "true) of a 2D beam (geometry.shape = 'beam'); allowed here: rebuild")
         placed = self.placement(p, mode)
         if placed is not None:
             p = dict(p, **{"zone.half_width": placed.half_width})
@@ -313,6 +316,9 @@ class Study:
                     qoi[f"peak_{name}_no_fracture"] = float(np.max(ref[name]))
                     still = qoi[f"peak_{name}_no_fracture"]  # (0 in a run too short to move: no change to speak of)
                     qoi[f"{name}_change_by_fracture"] = qoi[f"peak_{name}"] / still - 1 if still else float("nan")
+        if p.get("zone.conversion") == "release" and not (p.get("zone.grow") and p["geometry.shape"] == "beam"):
+            raise CaseError("zone.conversion = 'release': seeded particles are built for a growing zone (zone.grow = "
+                            "true) of a 2D beam (geometry.shape = 'beam'); allowed here: rebuild")
         placed = self.placement(p, mode)
         if placed is not None:
             qoi.update(placed.qoi())
@@ -343,7 +349,8 @@ FORM_WORDS = {"rod": "a flat-faced rod (impactors.*.shape = 'rod')", "impactor":
 # the tables that say what is simulated (not how: mesh, zone, fem, clock, output)
 SPECIMEN = ("materials.", "interfaces.", "laminates.", "geometry.", "impactors.", "loads.", "delaminations.",
             "sheets.", "supports.")
-PLACEMENT_KEYS = ("zone.placement", "zone.grow_at", "zone.margin", "zone.half_width", "zone.grow", "zone.grow_to")
+PLACEMENT_KEYS = ("zone.placement", "zone.grow_at", "zone.margin", "zone.half_width", "zone.grow", "zone.grow_to",
+                  "zone.conversion")
 
 
 def _physics_key(p: dict) -> tuple:

@@ -39,6 +39,7 @@ from ..participants.fem import (cohesive_node_bonds, cohesive_penalty, energies_
                                 make_region, node_to_face_bonds)
 from .schema import section
 from .selectors import footprint, tie_particles, whole_spacings
+from .seeded import ZoneView, reserve_scenes
 
 
 @dataclass
@@ -221,6 +222,10 @@ def beam(study, p: dict, mode: str, dem: str, start=None):
     clamp = _support(study, p) == "clamped"
     zone = _particle_block if dim == 3 else _particle_zone
     lat, scene, intra, inter = zone(built, w, tied=(mode == "coupled"), clamped=(mode == "dem" and clamp))
+    engine_scene = None
+    seeded = mode == "coupled" and p.get("zone.grow") and p.get("zone.conversion") == "release"
+    if seeded:  # the reserve's particles in the engine from the start (study/seeded.py)
+        scene, engine_scene = reserve_scenes(scene, zone(built, grow_limit(p, built), tied=True, clamped=False)[1], t)
     built.lattice, built.intra, built.inter = lat, intra, inter
     built.column = lat.index[:, 0] if dim == 3 else lat.column
     built.end_held = mode == "coupled" or clamp
@@ -253,8 +258,11 @@ def beam(study, p: dict, mode: str, dem: str, start=None):
                                                                   groups=built.mesh_groups), extra_mass=extra_mass)
             built.node_bonds = _far_field_bonds(p, built, dyn)
             return dyn
-        sim, clock = coupled_simulation(p, make, scene, dem, t_end, models=models, start=start, hold=hold)
+        sim, clock = coupled_simulation(p, make, scene, dem, t_end, models=models, start=start, hold=hold,
+                                        engine=getattr(start, "engine", None), engine_scene=engine_scene)
         backend, built.dyn, built.clock = clock.dem, clock.fem, clock
+        if seeded:
+            backend = ZoneView(backend, lat.n)
         built.fem_elements = clock.fem.region.n_elements
         _with_far_field(sim, built)
     built.backend = backend

@@ -40,6 +40,7 @@ move took it to (a contact force one substep late, on that substep only).
 """
 from __future__ import annotations
 
+import time
 from dataclasses import replace
 
 import numpy as np
@@ -120,6 +121,10 @@ class Growth:
         self.offset = {"external_work": 0.0, "dissipated": 0.0}  # J, the ledger's accounts carried over
         self.limit_warning = ""
         self.step0 = 0  # the loop step the current model started at
+        self.wall = 0.0  # s spent converting (building the grown zones' models)
+        # released (study/seeded.py): the engine holds the reserve from the start and goes on
+        # across conversions; rebuild: a new engine for each zone
+        self.release = p.get("zone.conversion") == "release"
         # the particles' positions and velocities the current model's engine was built with
         # (None: the first zone, from rest); a resume builds it from the same ones, so that
         # what an engine derives at its build (its bonds' rest lengths) is the same
@@ -185,6 +190,7 @@ class Growth:
         return q
 
     def _assemble(self, half_width: float, start=None, error=CaseError):
+        """(Simulation, Built) of the zone at ``half_width``, continued from ``start``."""
         try:
             return self.study.assemble(self._p(half_width), "coupled", self.dem, start)
         except CaseError as exc:  # the grown zone's model cannot be built: the run cannot go on as asked
@@ -236,12 +242,13 @@ class Growth:
     def convert(self, half_width: float, step: int):
         """The coupled model of the zone grown to ``half_width`` (m), continued from the state at
         loop step ``step``; the old model is closed."""
+        t0 = time.perf_counter()
         old_sim, old = self.sim, self.built
         old_sim.sync() if old_sim.sync is not None else None
         before = old_sim.energies()
-        transfer = _Transfer(old, old.clock.momentum_snapshot, self.symmetric)
-        # the old engine closed first: YADE runs one scene per process
-        old_sim.close()
+        transfer = _Transfer(old, old.clock.momentum_snapshot, self.symmetric, self.release)
+        if not self.release:  # the old engine closed first: YADE runs one scene per process
+            old_sim.close()
         sim, built = self._assemble(half_width, transfer, error=RuntimeError)
         old_sim.close = lambda: self.sim.close()  # whoever holds the first model closes the current one
         self.engine_start, self.step0 = transfer.engine_start, step
@@ -265,6 +272,7 @@ class Growth:
                 f"zone.grow: the conversion at t = {t:.4g} s changed the stored energy by {jump:.2g} of the total "
                 f"(more than {JUMP_WARNING:g}): the converted far field was {transfer.softening}; the elements' "
                 "strain and motion map onto the particles only approximately: compare with a larger starting zone")
+        self.wall += time.perf_counter() - t0
         return sim
 
     # -- checkpoints ----------------------------------------------------------------------------
@@ -289,9 +297,12 @@ class Growth:
         w = float(state["half_width"])
         if abs(w - self.half_width) <= 1e-9 * w:
             return sim
-        sim.close()
-        self.engine_start = (np.asarray(state["engine_x"]), np.asarray(state["engine_v"]))
-        new, built = self._assemble(w, _Replay(*self.engine_start))
+        if self.release:  # the first zone's engine holds the reserve: released up to the zone's edge
+            new, built = self._assemble(w, _Released(self.built.clock))
+        else:
+            sim.close()
+            self.engine_start = (np.asarray(state["engine_x"]), np.asarray(state["engine_v"]))
+            new, built = self._assemble(w, _Replay(*self.engine_start))
         new.warnings = sim.warnings
         sim.close = lambda: self.sim.close()
         self.half_width = w
@@ -303,7 +314,8 @@ class Growth:
         return {"zone_conversions": float(len(e)), "zone_grown_half_width": self.half_width,
                 "zone_first_conversion_time": float(e[0, 0]) if len(e) else -1.0,
                 "zone_conversion_energy_jump": float(np.abs(e[:, 2]).max(initial=0.0)),
-                "zone_conversion_momentum_jump": float(e[:, 3].max(initial=0.0))}
+                "zone_conversion_momentum_jump": float(e[:, 3].max(initial=0.0)),
+                "zone_conversion_wall_s": self.wall}
 
     def history(self) -> dict[str, np.ndarray]:
         e = np.array(self.events).reshape(-1, 4)
@@ -322,12 +334,25 @@ class _Replay:
         return replace(scene, x=self.x, velocity=self.v)
 
 
+class _Released:
+    """A resume's start on the first zone's engine (its particles seeded): the particles of the
+    zone the checkpoint holds are released there (the checkpoint then restores everything)."""
+
+    def __init__(self, first_clock):
+        self.engine, self.slaved = first_clock.dem, first_clock.tie.itf.ids
+
+    def __call__(self, fem, scene, itf, models):
+        self.engine.release(np.setdiff1d(self.slaved, itf.ids))
+
+
 class _Transfer:
     """The state of the old model at its last FEM step, handed to the grown zone's model as it
-    is built (coupled_simulation's ``start``)."""
+    is built (coupled_simulation's ``start``). ``release``: the particles are seeded (study/
+    seeded.py): the old model's engine goes on, the converted particles released in it."""
 
-    def __init__(self, old, momentum: np.ndarray, symmetric: bool = True):
-        clock, backend = old.clock, old.backend
+    def __init__(self, old, momentum: np.ndarray, symmetric: bool = True, release: bool = False):
+        clock = old.clock
+        backend = clock.dem  # (every particle the engine holds: a seeded zone's reserve too)
         self.symmetric = symmetric
         region = old.dyn.region
         self.old, self.momentum = old, np.array(momentum, float)
@@ -335,7 +360,8 @@ class _Transfer:
         self.u, self.v, self.t = clock.u_snapshot.copy(), clock.v_start_snapshot.copy(), float(clock.t_snapshot)
         self.fem_state = old.dyn.checkpoint_state()
         self.x, self.vel = backend.positions(), backend.velocities()
-        self.X = old.lattice.x
+        self.X = backend.scene.x if release else old.lattice.x
+        self.engine = backend if release else None
         self.softening = "elastic at its interfaces"  # what the converted far field's cohesive pairs carried
         self.slaved = np.zeros(len(self.X), bool)
         self.slaved[clock.tie.itf.ids] = True
@@ -384,6 +410,11 @@ class _Transfer:
             shifted = converted & free & ~held[:, c]
             if shifted.any():
                 v[shifted, c] += (self.momentum[c] - P[c]) / scene.mass[shifted].sum()
+        if self.engine is not None:  # seeded: released where the FEM carried them (x: to round-off)
+            self.engine.release(np.setdiff1d(np.flatnonzero(self.slaved), itf.ids))
+            self.engine.set_all_velocities(v)
+            self.engine_start = None
+            return None
         self.engine_start = (x, v)
         return replace(scene, x=x, velocity=v)
 

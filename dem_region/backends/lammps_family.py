@@ -270,6 +270,26 @@ class VerletArrays:
         if first:
             self._cmd("fix hold iface setforce 0 0 0")
 
+    def release(self, ids: np.ndarray) -> None:
+        """Particles ``ids`` no longer slaved: they move with their forces again (a symmetry
+        plane's partial prescription stays). The held group is made again, not a new one beside
+        it (LAMMPS holds at most 32 groups; LIGGGHTS has no ``group clear``), its fix after the
+        store/force fix as before."""
+        held = np.setdiff1d(self.prescribed, np.asarray(ids, int))
+        if not len(self.prescribed):
+            return
+        self._setup_needed = True
+        self._cmd("unfix hold\ngroup iface delete")
+        self.prescribed = np.zeros(0, int)
+        if len(held):
+            self.prescribe(held)
+
+    def set_all_velocities(self, v: np.ndarray) -> None:
+        """Every particle's velocity (n, 3) m/s as ``velocities()`` reports it (v_{k-1/2}), written
+        whole, held components too: a model continued on this engine starts from it as a new
+        engine built with these velocities would."""
+        self.V[:] = np.asarray(v, float).reshape(-1, 3)
+
     def set_velocities(self, ids: np.ndarray, v: np.ndarray) -> None:
         """Velocities v (k, 3) m/s of particles ``ids``; of a partially prescribed particle
         only its driven components. The plan (which components of which rows) once per ids

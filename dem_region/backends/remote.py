@@ -229,6 +229,14 @@ class RemoteBackend:
         names, (self.F, self.V) = self._shared_pair(len(self.ids))
         self._call("prescribe", self.ids.tolist(), *names)
 
+    def release(self, ids: np.ndarray) -> None:
+        """Particles ``ids`` no longer slaved (the interface arrays follow the next prescribe)."""
+        self._call("call", "release", np.asarray(ids, int).tolist())
+        self.prescribed = np.setdiff1d(self.prescribed, np.asarray(ids, int))
+
+    def set_all_velocities(self, v: np.ndarray) -> None:
+        self._call("call", "set_all_velocities", np.asarray(v, float).tolist())
+
     def _run(self, op: str, between: Callable[[], None] | None, n: int = 1) -> None:
         clock = time.perf_counter
         if self.bell is None and available():

@@ -180,6 +180,29 @@ class YadeBackend:
                 self._partial.pop(i, None)
             elif i not in self.prescribed:
                 self._partial[i] = sorted(set(self._partial.get(i, [])) | {"xyz".index(c) for c in dofs})
+            if dofs != "xyz":  # kept past a full prescription: what a release leaves held
+                self._planes = getattr(self, "_planes", {})
+                self._planes[i] = set(self._planes.get(i, ())) | {"xyz".index(c) for c in dofs}
+
+    def release(self, ids: np.ndarray) -> None:
+        """Particles ``ids`` no longer slaved: they move with their forces and touch the others
+        again (a symmetry plane's partial prescription stays)."""
+        ids = np.asarray(ids, int)
+        self.prescribed = np.setdiff1d(self.prescribed, ids)
+        planes = getattr(self, "_planes", {})
+        for i in ids.tolist():
+            self.O.bodies[i].groupMask = 1
+            held = "".join("xyz"[k] for k in planes.get(i, ())) + ("zXY" if self.scene.plane else "")
+            self._states[i].blockedDOFs = held
+            if i in planes:
+                self._partial[i] = sorted(planes[i])
+
+    def set_all_velocities(self, v: np.ndarray) -> None:
+        """Every particle's velocity (n, 3) m/s as ``velocities()`` reports it, written whole:
+        a model continued on this engine starts from it."""
+        V3 = self.yade.Vector3
+        for s, vi in zip(self._states, np.asarray(v, float).tolist()):
+            s.vel = V3(*vi)
 
     def set_velocities(self, ids: np.ndarray, v: np.ndarray) -> None:
         V3, states, partial = self.yade.Vector3, self._states, getattr(self, "_partial", {})

@@ -1,0 +1,110 @@
+"""A growing zone's particles seeded in advance and released (issue #25, part 3;
+``zone.conversion = "release"``, coupling/study/seeded.py).
+
+The coarse seed beam struck at 12 m/s from a 3 mm zone that grows where the far field's Hoffman
+index reaches 0.12 (four conversions in 15 us), once with a new engine for each zone (rebuild)
+and once with every particle out to grow_to in the engine from t = 0 (release): the same
+conversions at the same times, and every history series the same to 1e-6 of its scale (the only
+difference: the engine's placeholder bonds, 1e-9 of the lattice's stiffness, keep their t = 0
+rest lengths where a rebuilt engine takes the current ones). In process: one engine through the
+whole run, the seeded particles where the FEM carries them, the modelled part's mass exactly
+(the seeded particles carry none), and a resume after a conversion bit for bit."""
+import numpy as np
+import pytest
+
+from coupling.case import load_case
+from coupling.simulation import run_clock
+from interfaces.transition import TransitionInterface
+
+GROW = {"zone.grow": True, "zone.half_width": 3e-3, "impactors.cylinder.velocity": 12.0, "zone.grow_at": 0.12,
+        "clock.t_end": 1.5e-5}
+
+
+def _run(conversion: str, dem: str, sets: dict = GROW, keep=None):
+    """(history, growth) of the coarse beam; keep(study, sim) is called before the model closes."""
+    case = load_case("beam_impact_coarse", dict(sets, **{"zone.conversion": conversion}))
+    study, p = case.scene, case.parameters
+    sim = study.build(p, "coupled", dem)
+    try:
+        result = run_clock(sim)
+        if keep is not None:
+            keep(study, result["simulation"])
+    finally:
+        sim.close()
+    return result["history"], study.growth
+
+
+def _same_run(dem: str) -> None:
+    rebuilt, g_rebuilt = _run("rebuild", dem)
+    engines = []
+    released, g_released = _run("release", dem, keep=lambda study, sim: engines.append(study.growth.built.clock.dem))
+    assert len(g_released.events) == len(g_rebuilt.events) >= 3
+    for a, b in zip(g_rebuilt.events, g_released.events):
+        assert b[0] == a[0] and b[1] == pytest.approx(a[1], rel=1e-12)  # when and how far
+        assert b[3] < 1e-11  # momentum to round-off
+    assert set(rebuilt) == set(released)
+    for key, a in rebuilt.items():
+        a, b = np.asarray(a, float), np.asarray(released[key], float)
+        scale = np.nanmax(np.abs(a), initial=0.0)
+        assert a.shape == b.shape and np.nanmax(np.abs(a - b), initial=0.0) <= 1e-6 * scale + 1e-300, key
+
+
+@pytest.mark.parametrize("dem", ["liggghts", "lammps"])
+def test_released_particles_answer_as_a_rebuilt_engine(dem):
+    _same_run(dem)
+
+
+@pytest.mark.slow
+def test_released_particles_answer_as_a_rebuilt_engine_on_yade():
+    _same_run("yade")
+
+
+def test_one_engine_holds_the_reserve_slaved_to_the_fem_and_carrying_no_mass():
+    """In process (LIGGGHTS): the first zone's engine runs the whole run; it holds every
+    particle out to grow_to from the start; after the last conversion the still seeded ones sit
+    where the FEM's field carries them (X + W u), no law bond reaches them, and the far field's
+    nodes and the free particles carry the slice's mass rho L H t exactly."""
+    case = load_case("beam_impact_coarse", dict(GROW, **{"zone.conversion": "release"}))
+    study, p = case.scene, case.parameters
+    sim = study.build(p, "coupled", "liggghts")
+    first = study.growth.built.clock.dem
+    n_first = first.scene.n
+    try:
+        run_clock(sim)
+        growth = study.growth
+        built, clock = growth.built, growth.built.clock
+        engine, d, lam = clock.dem, built.t, built.lam
+        assert engine is first and growth.events  # never rebuilt
+        rows = built.lattice.n // (built.lattice.column.max() + 1)
+        assert n_first == engine.scene.n == (int(round(growth.limit / d)) + 1) * rows  # columns out to grow_to
+        seeded = clock.tie.itf.ids[engine.scene.x[clock.tie.itf.ids, 0] > growth.half_width + 1e-9 * d]
+        assert len(seeded) == engine.scene.n - built.lattice.n
+        W = TransitionInterface.build(clock.fem.region, engine.scene.x, seeded).W
+        x = engine.positions()[seeded, :2]
+        u = clock.fem.state.u - clock.dt_dem * clock.fem.state.v  # (the FEM drifts one engine step ahead)
+        assert np.abs(x - (engine.scene.x[seeded, :2] + W @ u)).max() < 1e-9 * d
+        assert not np.isin(np.concatenate([built.intra.pairs.ravel(), built.inter.pairs.ravel()]), seeded).any()
+        free = clock.tie.free_particles(engine.scene.n).astype(bool)
+        mass = clock.fem.m.sum() + engine.scene.mass[free].sum()
+        assert mass == pytest.approx(lam.ply["rho"] * 0.5 * p["geometry.span"] * lam.thickness * d, rel=1e-12)
+    finally:
+        sim.close()
+
+
+def test_a_released_run_resumed_after_a_conversion_finishes_as_the_uninterrupted_one(tmp_path):
+    """LAMMPS (the laws in its worker), the checkpoint at two thirds of the run: the resumed run
+    builds the first zone's engine and releases up to the checkpoint's zone."""
+    from test_growth import _resumed_as_straight
+    _resumed_as_straight(tmp_path, "beam_impact_coarse", dict(GROW, **{"clock.t_end": 9e-6,
+                                                                     "zone.conversion": "release"}), "lammps", 2 / 3)
+
+
+@pytest.mark.parametrize("name, sets", [
+    ("beam_impact_coarse", {"zone.conversion": "release"}),  # a zone that does not grow
+    ("beam_impact_3d_coarse", {"zone.grow": True, "zone.conversion": "release"}),
+    ("cfrp_beam_impact_coarse", {"zone.grow": True, "zone.conversion": "release"}),
+])
+def test_release_where_it_is_not_built_is_refused(femdem, name, sets):
+    code, s, err = femdem("run", name, *[f"--set={k}={str(v).lower() if isinstance(v, bool) else v}"
+                                         for k, v in sets.items()])
+    assert code == 2 and "zone.conversion" in err and "allowed" in err and s is None
