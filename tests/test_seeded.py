@@ -8,7 +8,9 @@ conversions at the same times, and every history series the same to 1e-6 of its 
 difference: the engine's placeholder bonds, 1e-9 of the lattice's stiffness, keep their t = 0
 rest lengths where a rebuilt engine takes the current ones). In process: one engine through the
 whole run, the seeded particles where the FEM carries them, the modelled part's mass exactly
-(the seeded particles carry none), and a resume after a conversion bit for bit."""
+(the seeded particles carry none), and a resume after a conversion bit for bit. The 3D strip
+(a quarter: the seeded particles on the plane y = 0 held there once released) the same until
+the run's own sensitivity takes over."""
 import numpy as np
 import pytest
 
@@ -20,33 +22,43 @@ GROW = {"zone.grow": True, "zone.half_width": 3e-3, "impactors.cylinder.velocity
         "clock.t_end": 1.5e-5}
 
 
-def _run(conversion: str, dem: str, sets: dict = GROW, keep=None):
-    """(history, growth) of the coarse beam; keep(study, sim) is called before the model closes."""
-    case = load_case("beam_impact_coarse", dict(sets, **{"zone.conversion": conversion}))
+GROW_3D = {"zone.grow": True, "zone.half_width": 1.8e-3, "impactors.cylinder.velocity": 12.0, "zone.grow_to": 6e-3,
+           "laminates.beam.far_field_interfaces": "cohesive", "clock.t_end": 1e-5}
+
+
+def _run(conversion: str, dem: str, sets: dict = GROW, name: str = "beam_impact_coarse"):
+    """(history, growth) of a beam run."""
+    case = load_case(name, dict(sets, **{"zone.conversion": conversion}))
     study, p = case.scene, case.parameters
     sim = study.build(p, "coupled", dem)
     try:
         result = run_clock(sim)
-        if keep is not None:
-            keep(study, result["simulation"])
     finally:
         sim.close()
     return result["history"], study.growth
 
 
-def _same_run(dem: str) -> None:
-    rebuilt, g_rebuilt = _run("rebuild", dem)
-    engines = []
-    released, g_released = _run("release", dem, keep=lambda study, sim: engines.append(study.growth.built.clock.dem))
-    assert len(g_released.events) == len(g_rebuilt.events) >= 3
+def _same_run(dem: str, name: str = "beam_impact_coarse", sets: dict = GROW, until: float = np.inf) -> tuple:
+    """Rebuilt against released: the same conversions, momentum to round-off, every history
+    series within 1e-6 of its scale up to ``until`` s (the whole run by default)."""
+    rebuilt, g_rebuilt = _run("rebuild", dem, sets, name)
+    released, g_released = _run("release", dem, sets, name)
+    assert len(g_released.events) == len(g_rebuilt.events) >= 1
     for a, b in zip(g_rebuilt.events, g_released.events):
         assert b[0] == a[0] and b[1] == pytest.approx(a[1], rel=1e-12)  # when and how far
         assert b[3] < 1e-11  # momentum to round-off
     assert set(rebuilt) == set(released)
+    early = np.asarray(rebuilt["time"]) <= until
     for key, a in rebuilt.items():
         a, b = np.asarray(a, float), np.asarray(released[key], float)
-        scale = np.nanmax(np.abs(a), initial=0.0)
-        assert a.shape == b.shape and np.nanmax(np.abs(a - b), initial=0.0) <= 1e-6 * scale + 1e-300, key
+        assert a.shape == b.shape, key
+        if a.ndim and len(a) == len(early):
+            # (a momentum component is to scale with the momentum: the 3D strip's y is round-off;
+            # the ledger's balance error is already a fraction of the total energy)
+            scale = max(np.nanmax(np.abs(rebuilt[c]), initial=0.0) for c in ("momentum_x", "momentum_y", "momentum_z")) \
+                if key.startswith("momentum_") else 1.0 if key.endswith("_rel") else np.nanmax(np.abs(a), initial=0.0)
+            assert np.nanmax(np.abs(a - b)[early], initial=0.0) <= 1e-6 * scale + 1e-300, key
+    return rebuilt, released
 
 
 @pytest.mark.parametrize("dem", ["liggghts", "lammps"])
@@ -57,6 +69,17 @@ def test_released_particles_answer_as_a_rebuilt_engine(dem):
 @pytest.mark.slow
 def test_released_particles_answer_as_a_rebuilt_engine_on_yade():
     _same_run("yade")
+
+
+def test_a_3d_strip_s_released_particles_answer_as_a_rebuilt_engine():
+    """The 3D coarse strip with a cohesive far field (LIGGGHTS), its zone grown by the contact:
+    the same to 1e-6 until 1.5 us after the conversion. Later the two drift apart as any
+    perturbation of this run does (the cylinder's contact switching across the strip's width):
+    doubling the placeholder bonds' 1e-9 stiffness moves the contact force by 0.2 %, LAMMPS
+    against LIGGGHTS by 0.9 % (session 31); so after that only the peak deflection, to 1e-3."""
+    rebuilt, released = _same_run("liggghts", "beam_impact_3d_coarse", GROW_3D, until=2.5e-6)
+    a, b = (np.max(h["centre_displacement"]) for h in (rebuilt, released))
+    assert b == pytest.approx(a, rel=1e-3)
 
 
 def test_one_engine_holds_the_reserve_slaved_to_the_fem_and_carrying_no_mass():
@@ -101,10 +124,11 @@ def test_a_released_run_resumed_after_a_conversion_finishes_as_the_uninterrupted
 
 @pytest.mark.parametrize("name, sets", [
     ("beam_impact_coarse", {"zone.conversion": "release"}),  # a zone that does not grow
-    ("beam_impact_3d_coarse", {"zone.grow": True, "zone.conversion": "release"}),
     ("cfrp_beam_impact_coarse", {"zone.grow": True, "zone.conversion": "release"}),
+    ("rod_impact_coarse", {"zone.conversion": "release"}),
 ])
 def test_release_where_it_is_not_built_is_refused(femdem, name, sets):
     code, s, err = femdem("run", name, *[f"--set={k}={str(v).lower() if isinstance(v, bool) else v}"
                                          for k, v in sets.items()])
-    assert code == 2 and "zone.conversion" in err and "allowed" in err and s is None
+    assert code == 2 and "zone.conversion" in err and ("allowed" in err or "known keys" in err) and s is None
+    assert len(err.strip().splitlines()) == 1

@@ -285,9 +285,10 @@ class Study:
         """(Simulation, Built) of ``p``: the participants, the probes and the fields."""
         assemble = {"plate": plate, "disc": disc, "bonded_beam": bonded_beam, "bonded_beam_3d": bonded_beam,
                     "panel": assemble_panel, "block": block}
-        if p.get("zone.conversion") == "release" and not (p.get("zone.grow") and p["geometry.shape"] == "beam"):
+        if p.get("zone.conversion") == "release" and not (p.get("zone.grow") and
+                                                          p["geometry.shape"] in ("beam", "beam_3d")):
             raise CaseError("zone.conversion = 'release': seeded particles are built for a growing zone (zone.grow = "
-                            "true) of a 2D beam (geometry.shape = 'beam'); allowed here: rebuild")
+                            "true) of a laminated beam (geometry.shape = 'beam' or 'beam_3d'); allowed here: rebuild")
         placed = self.placement(p, mode)
         if placed is not None:
             p = dict(p, **{"zone.half_width": placed.half_width})
@@ -316,9 +317,6 @@ class Study:
                     qoi[f"peak_{name}_no_fracture"] = float(np.max(ref[name]))
                     still = qoi[f"peak_{name}_no_fracture"]  # (0 in a run too short to move: no change to speak of)
                     qoi[f"{name}_change_by_fracture"] = qoi[f"peak_{name}"] / still - 1 if still else float("nan")
-        if p.get("zone.conversion") == "release" and not (p.get("zone.grow") and p["geometry.shape"] == "beam"):
-            raise CaseError("zone.conversion = 'release': seeded particles are built for a growing zone (zone.grow = "
-                            "true) of a 2D beam (geometry.shape = 'beam'); allowed here: rebuild")
         placed = self.placement(p, mode)
         if placed is not None:
             qoi.update(placed.qoi())

@@ -224,8 +224,10 @@ def beam(study, p: dict, mode: str, dem: str, start=None):
     lat, scene, intra, inter = zone(built, w, tied=(mode == "coupled"), clamped=(mode == "dem" and clamp))
     engine_scene = None
     seeded = mode == "coupled" and p.get("zone.grow") and p.get("zone.conversion") == "release"
+    planes = lat  # the lattice whose symmetry planes the engine holds
     if seeded:  # the reserve's particles in the engine from the start (study/seeded.py)
-        scene, engine_scene = reserve_scenes(scene, zone(built, grow_limit(p, built), tied=True, clamped=False)[1], t)
+        planes, reserve, _, _ = zone(built, grow_limit(p, built), tied=True, clamped=False)
+        scene, engine_scene = reserve_scenes(scene, reserve, t)
     built.lattice, built.intra, built.inter = lat, intra, inter
     built.column = lat.index[:, 0] if dim == 3 else lat.column
     built.end_held = mode == "coupled" or clamp
@@ -233,9 +235,10 @@ def beam(study, p: dict, mode: str, dem: str, start=None):
     models = built.models = (intra, inter, *built.impactors.values())
 
     def hold(backend) -> None:  # the symmetry planes
-        if dim == 3:
-            held = np.concatenate([scene.groups.get("interface", []), scene.groups.get("fixed", [])]).astype(int)
-            hold_symmetry_planes(backend, lat.index[:, 0], lat.index[:, 1], held)
+        if dim == 3:  # (seeded: the reserve's, the slaved particles too, held on them once released)
+            held = np.concatenate([[] if seeded else scene.groups.get("interface", []),
+                                   scene.groups.get("fixed", [])]).astype(int)
+            hold_symmetry_planes(backend, planes.index[:, 0], planes.index[:, 1], held)
         else:
             axis = np.flatnonzero(lat.column == 0)
             backend.prescribe(axis, "x")

@@ -389,6 +389,8 @@ class _Transfer:
         kept = was >= 0
         x[kept], v[kept] = self.x[was[kept]], self.vel[was[kept]]
         converted = ~kept | (kept & self.slaved[np.maximum(was, 0)])
+        if self.engine is not None:  # seeded: those still slaved take the new tie's velocities
+            converted[itf.ids] = False
         ids = np.flatnonzero(converted)
         W = TransitionInterface.build(self.region, scene.x, ids).W
         dim = self.region.dim

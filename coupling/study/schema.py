@@ -322,7 +322,7 @@ SECTIONS: dict[str, dict[str, Param]] = {
                       "indices (as placement's) are evaluated, and elements whose index reaches grow_at within margin "
                       "of the zone's edge become particles, their state carried over (study/growth.py)", kind="bool"),
         "conversion": Param("rebuild", "how a grown zone's new particles enter the engine: rebuild (the engine is "
-                            "built again with the grown zone's particles at each conversion) or release (2D beams: "
+                            "built again with the grown zone's particles at each conversion) or release (beams, 2D and 3D: "
                             "every particle out to grow_to is in the engine from the start, slaved to the FEM, and "
                             "released at its conversion; study/seeded.py)", kind="str", choices=("rebuild", "release")),
         "grow_to": Param(0.0, "the farthest the zone may grow; the far field is meshed at the particle spacing out to "

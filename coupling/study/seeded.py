@@ -1,5 +1,5 @@
 """A growing zone's particles seeded in advance and released (``zone.conversion = "release"``;
-2D beams).
+laminated beams, 2D and 3D).
 
 Radioss's way (its particles are seeded from the start, slaved to their parent bricks, and
 released when a brick fails): the engine holds, from t = 0, every particle a growing zone may
@@ -15,7 +15,9 @@ process for each rebuild) against the reserve's particles in the engine and the 
 every step.
 
 The zone's lattice is a prefix of the reserve's (the lattice numbers its particles column by
-column from x = 0), so the zone's law bonds, impactors and probes keep their particle ids.
+column from x = 0), so the zone's law bonds, impactors and probes keep their particle ids. A
+quarter's symmetry planes are held on the whole reserve from the start (a slaved particle's
+velocity is written whole all the same), so a released particle on y = 0 stays held there.
 """
 from __future__ import annotations
 

@@ -295,13 +295,17 @@ class VerletArrays:
         only its driven components. The plan (which components of which rows) once per ids
         array (the interface's, each step) and prescription; the write compiled."""
         v = np.ascontiguousarray(v, float).reshape(-1, 3)
-        if ids is not getattr(self, "_vel_ids", None) or self._n_partial != self._vel_partial:
+        if (ids is not getattr(self, "_vel_ids", None) or self._n_partial != self._vel_partial
+                or self.prescribed is not self._vel_prescribed):
             rows = np.asarray(ids, int)
             driven = self._driven[rows]
-            written = driven | ~driven.any(axis=1, keepdims=True)
-            at = np.nonzero(written)
+            # a fully prescribed particle's velocity is written whole, on a symmetry plane too
+            # (a seeded particle, slaved until its release leaves the plane's hold)
+            whole = ~driven.any(axis=1, keepdims=True) | self._held_mask()[rows][:, None]
+            at = np.nonzero(driven | whole)
             self._vel_plan = tuple(np.ascontiguousarray(a, np.int64) for a in (rows[at[0]], at[1], at[0]))
-            self._vel_ids, self._vel_partial = ids, self._n_partial  # (ids held: its identity stays its own)
+            # (ids held: its identity stays its own)
+            self._vel_ids, self._vel_partial, self._vel_prescribed = ids, self._n_partial, self.prescribed
         put_components(self.V, *self._vel_plan, v)
 
     bulk_arrays = True  # positions read and forces written on the engine's arrays (ModelStep)
