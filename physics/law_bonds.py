@@ -372,7 +372,7 @@ class _FusedPlan:
             bonds._local, bonds._rot, bonds._chord = self.local, self.rot, self.chord
         self.K = np.ascontiguousarray(np.broadcast_to(np.asarray(law.K, float), (nb,)))
         n = len(bonds.ids)
-        if hasattr(law, "initiate"):
+        if hasattr(law, "initiate") and not law.never_initiates:
             self.law = law_kernels.PLY
             k = law.strengths
             self.hk = kernels.hoffman_coefficients(tuple(float(v) for v in (k.Xt, k.Xc, k.Yt, k.Yc, k.Zt, k.Zc,
@@ -394,9 +394,11 @@ class _FusedPlan:
             self.inc_bond = (order // 2).astype(INDEX)
             self.inc_ptr = np.concatenate([[0], np.cumsum(np.bincount(ends, minlength=n))]).astype(INDEX)
         else:
-            self.law = law_kernels.HASHIN
+            elastic = hasattr(law, "initiate")
+            self.law = law_kernels.ELASTIC if elastic else law_kernels.HASHIN
             self.hk = (1.0,) * 9
-            self.hp = np.array([law.K, law.Z0, law.R0, law.GIc, law.GIIc, law.eta, float(law.mixed_mode == "bk")])
+            self.hp = np.zeros(7) if elastic else \
+                np.array([law.K, law.Z0, law.R0, law.GIc, law.GIIc, law.eta, float(law.mixed_mode == "bk")])
             self.pstress, self.cell = np.zeros((0, 6)), np.zeros(0)
             self.axes, self.ply_axes, self.Gf = np.zeros((0, 3, 3)), np.zeros(0, INDEX), np.zeros((0, 1))
             self.aligned = np.full((1, 6), -1, INDEX)

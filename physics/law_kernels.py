@@ -36,7 +36,7 @@ PARALLEL_BONDS = 10_000  # families smaller than this run the serial build (no t
 # its thread count at each launch, and a YADE step on more threads than asked sums its forces in
 # another order from run to run)
 THREADS_ALLOWED = True
-HASHIN, PLY = 0, 1  # law families
+HASHIN, PLY, ELASTIC = 0, 1, 2  # law families (ELASTIC: a PlyBondLaw that never initiates)
 FIXED, CENTRAL, FRAME_2D = 0, 1, 2  # kinematics: fixed normal, corotated central, corotated 2D frame
 
 
@@ -52,7 +52,8 @@ def _bonds_pass(x, end, loc, d0, normal, area, Kb,
     (ndir, nb), unit tangents dir_e (ndir, nb, 3), h / span dir_h (ndir, nb), scratch un (nb,),
     reference midpoints X_mid (nb, 3)); CENTRAL (L0 (nb,) m, axis (nb, 3) out); FRAME_2D
     (reference chord s0 (nb, 3), out: local (nb, 3), rot (nb, 2), chord (nb, 3)).
-    Law ``law``: HASHIN with hp = (K, Z0, R0, GIc, GIIc, eta, bk); PLY with pstress (np, 6)
+    Law ``law``: HASHIN with hp = (K, Z0, R0, GIc, GIIc, eta, bk); ELASTIC (K dn, no state);
+    PLY with pstress (np, 6)
     scratch (Love-Weber stress, Voigt Pa), each particle's bonds inc_bond[inc_ptr[p]:inc_ptr[p + 1]] in bond order, cell (np,) m^3, distinct ply axes (a, 3, 3) and each bond's ply_axes (nb,), scale (nb,),
     hk = kernels.hoffman_coefficients(strengths),
     Gf (nb, c) J/m^2, state m0, mf, index (nb,) (of the bonds not yet initiated), crushed (nb,)
@@ -153,6 +154,9 @@ def _bonds_pass(x, end, loc, d0, normal, area, Kb,
                         m0[m] = dn
                         mf[m] = max(f_, dn * (1 + 1e-12))
             tn, d = ply_bond(dn, m0[m], mf[m], d_old, Kb[m])
+            t0, t1, t2 = tn * n0, tn * n1, tn * n2
+        elif law == ELASTIC:  # ply_bond before any initiation: K dn
+            tn, d = Kb[m] * dn, d_old
             t0, t1, t2 = tn * n0, tn * n1, tn * n2
         else:
             t0, t1, t2, d = hashin_bond(g0, g1, g2, n0, n1, n2, d_old,

@@ -198,6 +198,12 @@ class PlyBondLaw:
     strengths: object
     axes: np.ndarray
 
+    @property
+    def never_initiates(self) -> bool:
+        """No strength is finite: every bond stays a linear spring (a lattice's elastic springs;
+        the fused step then skips the Love-Weber stress and the Hoffman index)."""
+        return bool(np.all(np.isinf([float(v) for v in vars(self.strengths).values()])))
+
     def __post_init__(self):
         self.K = np.asarray(self.K, float)
         nb = self.K.size
