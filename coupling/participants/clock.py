@@ -76,7 +76,10 @@ class CoupledClock:
         # the elements touching the interface nodes are fast forces too: then no slow impulse
         # lands on a node the DEM moves, and the scheme does not resonate (see module doc)
         band = self.m > 1 and self.fast_band
-        self.band_elements = interface_band(fem.region, tie.itf.W) if band else np.zeros(0, int)
+        # (the particles the tie holds to the zone; not a growing zone's seeded ones beyond it,
+        # which the FEM moves and which push back nothing: study/seeded.py)
+        tied = tie.itf.W[: len(tie.itf.ids) - getattr(tie, "seeded", 0)]
+        self.band_elements = interface_band(fem.region, tied) if band else np.zeros(0, int)
         self._band = fem.region.element_force(self.band_elements) if self.band_elements.size else None
         shape = fem.state.v.shape  # the kicks' buffers (respa_kicks), rewritten at every DEM step
         self._f_fast, self._a_slow, self._no_band = np.zeros(shape), np.zeros(shape), np.zeros((0, shape[1]))

@@ -88,6 +88,7 @@ def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, st
         backend.build(engine_scene)
     if p["coupling.tie"] == "kinematic":
         tie = KinematicTie(itf, backend, scene.mass)
+        tie.seeded = len(scene.groups.get("dormant", ()))  # the interface's last rows (coupled_simulation)
     else:
         if not hasattr(backend, "add_forces"):
             raise NotImplementedError("the penalty tie needs added particle forces, not available on this engine yet")
@@ -129,7 +130,8 @@ def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, st
                 **{f"momentum_{c}": (lambda i=i: float(clock.momentum()[i])) for i, c in enumerate("xyz")}},
         energies=clock.energies,
         counts={"fem_nodes": region.n_nodes, "fem_elements": region.n_elements, "particles": scene.n,
-                "bonds": len(scene.bonds), "interface_particles": len(itf.ids),
+                "bonds": len(scene.bonds), "interface_particles": len(itf.ids) - len(scene.groups.get("dormant", ())),
+                **({"seeded_particles": len(scene.groups["dormant"])} if "dormant" in scene.groups else {}),
                 "law_bonds": sum(len(m.pairs) for m in models if hasattr(m, "pairs")),
                 **rank_shares(backend, clock.hosted)},
         clock_info={"dt_fem": dt, "dt_dem": dt / m, "dt_stable_fem": dt_fem, "dt_stable_dem": dt_dem, "substeps": m},
