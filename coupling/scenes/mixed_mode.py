@@ -30,7 +30,11 @@ MODES = ("coupled", "fem")
 # its whole ligament: peak 5.5 % low; with 10, 1.8 %)
 PARAMETERS = {**enf.PARAMETERS,  # (Z0 from 20 MPa, as the ENF's)
               "interface.cohesive_zone_bonds": Param(10.0, dl.PARAMETERS["interface.cohesive_zone_bonds"].doc,
-                                                     low=0.0, high=50.0)}
+                                                     low=0.0, high=50.0),
+              "interface.consistent_strengths": Param(
+                  True, "lower the stronger of Z0 and R0 to R0 = Z0 sqrt(GIIc / GIc), the condition under which "
+                  "the B-K law dissipates the mode mix's toughness (Turon et al. 2010; delamination.consistent): "
+                  "false keeps them as given", kind="bool")}
 
 
 def closed_form(p: dict) -> dict:
