@@ -200,7 +200,8 @@ def _follows(femdem, case: str, sets: list[str]) -> None:
         assert q["zone_grown_half_width"] >= tip + lead - 2 * s["parameters"]["zone.particle_size"] - 1e-9
     placed = _run(femdem, case, *sets)
     # (where the closed form's window misses its own checks the two need not agree: an SLB draw,
-    # undamped, R0 = 10 MPa, dissipated 0.80 / 0.79 x Gc(B) grown / placed, 1.4 % apart)
+    # undamped, R0 = 10 MPa, dissipated 0.80 / 0.79 x Gc(B) grown / placed, 1.4 % apart, before
+    # its strengths were put in Turon's ratio in session 31)
     if all(c["passed"] for c in placed["checks"].values()):
         for key in FOLLOWS[case]:
             assert abs(q[key] / placed["qoi"][key] - 1) < 0.01, (key, q[key], placed["qoi"][key])
