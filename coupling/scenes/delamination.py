@@ -326,6 +326,8 @@ def simulate(p: dict, mode: str, dem: str, spec: Specimen, supports, alpha: floa
         sim, spec.clock = coupled_simulation(p, fem_factory(spec, supports, alpha), spec.scene, dem, t_end,
                                              models=models, start=start)
         sim.probes["damage_at_zone_edge"] = lambda: float(spec.bonds.damage[-1])  # the window's last column
+        end = float(spec.bonds.X[spec.bonds.pairs[-1, 0], 0])
+        sim.probes["window_end"] = lambda: end  # m (a grown window's moves)
         return sim, spec.clock.fem, spec.bonds
     dyn = ExplicitDynamics(spec.region, supports=supports, alpha=alpha)
     pairs, area, face = spec.pairs, spec.pair_area, spec.face
@@ -533,6 +535,8 @@ def cohesive_zone_qoi(p: dict, h: dict, k: int, Gc: float, tau: float, mode: str
            "cohesive_zone_bonds_estimate": cohesive_zone_length(p, Gc, tau, mode) / d}
     if "damage_at_zone_edge" in h:  # coupled: the window's last column, the most it was damaged
         out["damage_at_zone_edge"] = float(np.max(h["damage_at_zone_edge"]))
+    if "window_end" in h:  # coupled: where the window ended last (m)
+        out["window_end"] = float(np.asarray(h["window_end"])[-1])
     return out
 
 

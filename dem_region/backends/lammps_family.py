@@ -276,7 +276,7 @@ class VerletArrays:
         it (LAMMPS holds at most 32 groups; LIGGGHTS has no ``group clear``), its fix after the
         store/force fix as before."""
         held = np.setdiff1d(self.prescribed, np.asarray(ids, int))
-        if not len(self.prescribed):
+        if len(held) == len(self.prescribed):  # none of them held
             return
         self._setup_needed = True
         self._cmd("unfix hold\ngroup iface delete")
