@@ -158,7 +158,7 @@ class WindowGrowth(Growth):
 
     def contact_reach(self) -> float:
         """m: the farthest crack-plane bond of the window whose interlaminar index reached
-        zone.grow_at (the cohesive zone and what is about to join it), 0 if none: the window
+        zone.grow_at (the cohesive zone and what is about to join it), -1 if none: the window
         keeps its lead ahead of it (an unstable crack outruns the band's elements ahead)."""
         bonds = self.built.inter
         t = bonds.traction
@@ -167,7 +167,7 @@ class WindowGrowth(Growth):
         Z0, R0 = self._strengths
         at = ((np.maximum(tn, 0.0) / Z0) ** 2 + (ts / R0) ** 2 >= self.grow_at) | (bonds.damage > 0)
         at &= bonds.damage < 1.0  # (the crack's faces in contact: not a process zone)
-        return float(bonds.X[bonds.pairs[at, 0], 0].max()) if at.any() else 0.0
+        return float(bonds.X[bonds.pairs[at, 0], 0].max()) if at.any() else -1.0
 
     def snap(self, x: float) -> float:
         x0, _, e = self._reserve

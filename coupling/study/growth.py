@@ -200,8 +200,9 @@ class Growth:
 
     # -- at each sample -------------------------------------------------------------------------
     def contact_reach(self) -> float:
-        """m: the farthest particle an impactor touches (its patch), 0 without contact."""
-        reach = 0.0
+        """m: the farthest particle an impactor touches (its patch: 0 while it touches the
+        symmetry plane's column alone), -1 without contact."""
+        reach = -1.0
         for m in self.built.impactors.values():
             x = self.built.backend.positions_of(m.ids)
             r = x - m.imp.x
@@ -223,7 +224,7 @@ class Growth:
         w = self.half_width
         reach = grown_reach(self._x0[flagged], self._x1[flagged], w, self.margin)
         contact = self.contact_reach()
-        near = contact > 0 and contact + self.margin > w * (1 + 1e-9)  # (no contact: nothing to follow)
+        near = contact >= 0 and contact + self.margin > w * (1 + 1e-9)  # (no contact: nothing to follow)
         if reach <= w * (1 + 1e-9) and not near:
             return None
         reach = max(reach, contact)
@@ -232,7 +233,7 @@ class Growth:
             if not self.limit_warning:
                 self.limit_warning = (
                     f"zone.grow: at t = {clock.t_snapshot:.4g} s the far field (index {index.max(initial=0.0):.2f}) or "
-                    f"{self.reach_name} ({contact * 1e3:.3g} mm) asks for the zone out to x = "
+                    f"{self.reach_name} ({max(contact, 0.0) * 1e3:.3g} mm) asks for the zone out to x = "
                     f"{(reach + self.margin) * 1e3:.4g} mm, beyond {self.limit_name} = {self.limit * 1e3:.4g} mm: the zone "
                     "grows no further")
                 self.sim.warnings.append(self.limit_warning)
