@@ -169,17 +169,23 @@ def test_a_window_end_off_the_crack_s_path_is_refused(femdem, case, end):
         assert code == 2 and err.startswith("femdem: dem.window_end = ") and err.count("\n") == 1, err
 
 
-# what a grown window must give as the closed form's window anywhere in the ranges (the ENF's
-# closed-form window is reached by its crack, docs/limits.md: its dissipation is that window's)
-FOLLOWS = {"dcb_coarse": ("peak_load", "dissipated_energy_ratio"), "enf_coarse": ("peak_load",),
-           "mixed_mode_coarse": ("peak_load", "dissipated_energy_ratio")}
+# what a grown window must give as the window fixed from t = 0 at its grown end (the
+# conversions carry the state over), and as the closed form's window (whose extent differs:
+# the ENF's is reached by its crack, docs/limits.md; an SLB's dissipation moved 1.5 % with it)
+SAME_AS_FIXED = ("peak_load", "dissipated_energy_ratio")
+SAME_AS_PLACED = {"dcb_coarse": ("peak_load", "dissipated_energy_ratio"), "enf_coarse": ("peak_load",),
+                  "mixed_mode_coarse": ("peak_load",)}
 
 
 def _follows(femdem, case: str, sets: list[str]) -> None:
-    """A grown window anywhere in the ranges against the closed form's window on the same
-    draw: the qoi FOLLOWS within 1 %, every check the closed form's window passes passes, no
-    damage ever at the grown window's edge, the window ahead of the crack tip by its lead (or
-    at its limit), momentum to round-off."""
+    """A grown window anywhere in the ranges: no damage ever at its edge, the window ahead of
+    the crack tip by its lead (or at its limit), momentum to round-off; the qoi SAME_AS_FIXED
+    within 1 % of the window fixed from t = 0 at the grown end; and against the closed form's
+    window on the same draw, the qoi SAME_AS_PLACED within 1 % and every check it passes passes.
+    (Session 31: an SLB draw, E11 = 40 GPa, GIc = 1999 J/m^2, eta = 1, dissipated 1.053 x Gc(B)
+    grown, 1.053 fixed at the grown end (80 mm), 1.069 in the closed form's window (67.8 mm, 4 mm
+    past the load line; the crack 9 mm long): how far the window reaches past the load line moves
+    a bending specimen's dissipation slope as it moves the ENF's peak.)"""
     from test_delamination_ranges import OUTSIDE
     from coupling.params import parse_set
     from hypothesis import assume
@@ -198,21 +204,16 @@ def _follows(femdem, case: str, sets: list[str]) -> None:
         lead = window_growth.lead(s["parameters"])
         tip = s["parameters"]["geometry.crack_length"] + q["crack_growth"]
         assert q["zone_grown_half_width"] >= tip + lead - 2 * s["parameters"]["zone.particle_size"] - 1e-9
+    fixed = _run(femdem, case, *sets, f"--set=dem.window_end={q['zone_grown_half_width']!r}")["qoi"]
+    for key in SAME_AS_FIXED:
+        assert abs(q[key] / fixed[key] - 1) < 0.01, (key, q[key], fixed[key])
     placed = _run(femdem, case, *sets)
     # (where the closed form's window misses its own checks the two need not agree: an SLB draw,
     # undamped, R0 = 10 MPa, dissipated 0.80 / 0.79 x Gc(B) grown / placed, 1.4 % apart, before
     # its strengths were put in Turon's ratio in session 31)
     if all(c["passed"] for c in placed["checks"].values()):
-        # a bending specimen's dissipation is the placed window's own where its crack ends closer
-        # than the lead to the window's edge (the intact band there, coupled to the arms in shear:
-        # an SLB draw whose crack ended 8.3 mm from it dissipated 0.971 x Gc(B), grown 0.988,
-        # the window fixed at the grown end 0.987; session 31). The DCB's holds to 1 % (drawn).
-        pq = placed["qoi"]
-        near = case != "dcb_coarse" and pq["window_end"] - (s["parameters"]["geometry.crack_length"] +
-                                                            pq["crack_growth"]) < window_growth.lead(s["parameters"])
-        for key in FOLLOWS[case]:
-            if not (near and key == "dissipated_energy_ratio"):
-                assert abs(q[key] / pq[key] - 1) < 0.01, (key, q[key], pq[key])
+        for key in SAME_AS_PLACED[case]:
+            assert abs(q[key] / placed["qoi"][key] - 1) < 0.01, (key, q[key], placed["qoi"][key])
     for name, check in placed["checks"].items():
         assert s["checks"][name]["passed"] or not check["passed"], (name, s["checks"][name])
 
