@@ -24,8 +24,9 @@ class KinematicTie:
 
     name = "kinematic"
 
-    def __init__(self, interface: TransitionInterface, dem, particle_mass: np.ndarray):
+    def __init__(self, interface: TransitionInterface, dem, particle_mass: np.ndarray, seeded: int = 0):
         self.itf, self.dem = interface, dem
+        self.seeded = seeded  # the interface's last rows: a growing zone's reserve (coupling/study/seeded.py)
         self.node_mass = interface.share_mass(particle_mass[interface.ids])
         self._F = np.zeros((len(interface.ids), 3))  # the interface particles' forces, each step
         dem.prescribe(interface.ids)
@@ -55,6 +56,7 @@ class PenaltyTie:
     F_p = k (x_h - x_p) on the particle, the opposite force back to the nodes by the transpose map."""
 
     name = "penalty"
+    seeded = 0
 
     def __init__(self, interface: TransitionInterface, dem, particle_mass: np.ndarray, stiffness: float):
         self.itf, self.dem, self.k = interface, dem, float(stiffness)

@@ -78,7 +78,7 @@ class CoupledClock:
         band = self.m > 1 and self.fast_band
         # (the particles the tie holds to the zone; not a growing zone's seeded ones beyond it,
         # which the FEM moves and which push back nothing: study/seeded.py)
-        tied = tie.itf.W[: len(tie.itf.ids) - getattr(tie, "seeded", 0)]
+        tied = tie.itf.W[: len(tie.itf.ids) - tie.seeded]
         self.band_elements = interface_band(fem.region, tied) if band else np.zeros(0, int)
         self._band = fem.region.element_force(self.band_elements) if self.band_elements.size else None
         shape = fem.state.v.shape  # the kicks' buffers (respa_kicks), rewritten at every DEM step

@@ -87,8 +87,7 @@ def _assemble(p, fem, itf, scene, backend, dem, t_end_default, history_every, st
     if engine_scene is not None:  # (None: an engine already running, its planes held)
         backend.build(engine_scene)
     if p["coupling.tie"] == "kinematic":
-        tie = KinematicTie(itf, backend, scene.mass)
-        tie.seeded = len(scene.groups.get("dormant", ()))  # the interface's last rows (coupled_simulation)
+        tie = KinematicTie(itf, backend, scene.mass, seeded=len(scene.groups.get("dormant", ())))
     else:
         if not hasattr(backend, "add_forces"):
             raise NotImplementedError("the penalty tie needs added particle forces, not available on this engine yet")
