@@ -14,14 +14,15 @@ import re
 import h5py
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, Phase, assume, given, settings
+from hypothesis import HealthCheck, Phase, assume, event, given, settings
 from hypothesis import strategies as st
 
 from conftest import assert_checks
 
 from coupling.case import load_case
 from coupling.params import CaseError, parse_set
-from coupling.scenes import dcb, enf
+from coupling.scenes import dcb, enf, mixed_mode
+from coupling.scenes import delamination as dl
 
 # the scene's warnings that the closed form does not hold (the DCB's says "loads (LEFM) do not apply")
 OUTSIDE = ("does not apply", "do not apply", "fewer than")
@@ -162,6 +163,25 @@ def test_all_fem_specimens_hold_over_their_ranges(femdem, case, m, h, L_rel, a_r
     s = run_in_domain(femdem, case, fem_sets(case, m, h, L_rel, a_rel, dcb_a, r))
     assert_checks(s)
     assert s["counts"]["particles"] == 0 and s["counts"]["interface_bonds"] > 0
+    assert_crack_path(s)
+
+
+def assert_crack_path(s: dict) -> None:
+    """A bending specimen's crack at the end of the loading, where beam theory puts it
+    (enf.final_crack_length, past the load line too; the DEM window's reach): the cohesive
+    model's fully debonded tip behind it by less than the cohesive zone's (upper) estimate, and
+    not beyond it by more than two bonds."""
+    if s["scene"] not in ("enf", "mixed_mode"):
+        return
+    p, q = s["parameters"], s["qoi"]
+    scene = enf if s["scene"] == "enf" else mixed_mode
+    cf = scene.closed_form(p)
+    d = dl.bond_spacing(p, s["mode"])
+    Z0, R0 = dl.resolved_strengths(p, d, dl.keys_of(s["mode"], p))
+    tau = {"I": (p["interface.GIc"], Z0), "II": (p["interface.GIIc"], R0)}
+    zone = max(dl.cohesive_zone_length(p, *tau[m], m) for m in cf["modes"])
+    tip, a_end = p["geometry.crack_length"] + q["crack_growth"], q["final_crack_length_beam_theory"]
+    assert a_end - zone <= tip <= a_end + 2 * d, (tip, a_end, zone, d)
 
 
 UPPER = st.floats(0.6, 1.8)  # the upper arm's element length / the lower's: arms meshed apart, node to face
@@ -220,6 +240,7 @@ def test_all_fem_specimens_hold_over_wider_draws(femdem, case, m, h, L_rel, a_re
     sets = fem_sets(case, m, h, L_rel, a_rel, dcb_a, r, load)
     s = run_in_domain(femdem, case, apart(sets, ratio) if ratio else sets)
     assert_checks(s)
+    assert_crack_path(s)
 
 
 @pytest.mark.slow
@@ -258,11 +279,52 @@ def test_dcb_refuses_what_it_cannot_model(femdem, sets, key):
     (["--set=geometry.half_span=0.06"], "geometry.half_span"),  # 2L > length
     (["--set=geometry.length=0.15"], "geometry.length"),  # an overhang of 0.73 L
     (["--set=load.duration_periods=30"], "load.duration_periods"),  # past the verified pace
+    (["--set=geometry.half_span=0.04", "--set=geometry.length=0.08", "--set=geometry.crack_length=0.02",
+      "--set=load.final_deflection_factor=6", "--set=load.duration_periods=36"],
+     "load.final_deflection_factor"),  # the crack would run to 67 mm, the window ends at 68 mm at the latest
 ])
 def test_enf_refuses_what_it_cannot_model(femdem, sets, key):
     code, s, err = femdem("run", "enf_coarse", *sets)
     assert code == 2 and s is None
     assert err.startswith(f"femdem: {key} = ") and err.count("\n") == 1
+
+
+@settings(max_examples=60, deadline=None)
+@given(case=st.sampled_from(["enf_coarse", "mixed_mode_coarse"]), m=MATERIAL, h=THICK, L_rel=st.floats(1.2, 2.0),
+       a_rel=st.floats(0.3, 0.7), overhang=st.floats(0.0, 0.6), deflection=st.floats(1.1, 6.0))
+def test_a_bending_crack_s_path_and_its_window(case, m, h, L_rel, a_rel, overhang, deflection):
+    """Beam theory's final crack (enf.final_crack_length, the DEM window's reach) over the
+    ranges: the deflection at the initial crack is the ENF's closed-form one; the final crack
+    grows at the final deflection, on the stable branch; the window holds the load line and
+    the final crack plus dem.margin and ends by geometry.length - 4 h, or the case is refused
+    naming the final deflection, and the largest one it allows is accepted."""
+    sets = bending_sets(m, h, L_rel, a_rel, 0, 0.18e-3, 6.0, overhang, deflection)
+    try:
+        p = load_case(case, parse_set([a.split("=", 1)[1] for a in sets])).parameters
+    except CaseError:
+        assume(False)
+    scene = enf if case == "enf_coarse" else mixed_mode
+    cf = scene.closed_form(p)
+    a0, L, d = p["geometry.crack_length"], p["geometry.half_span"], p["zone.particle_size"]
+    delta0 = enf.deflection_on_path(p, cf, a0)
+    if case == "enf_coarse":
+        assert delta0 == pytest.approx(cf["delta_peak"], rel=1e-12)
+    a_end = enf.final_crack_length(p, cf)
+    assert a0 < a_end < 2 * L - cf["c"]
+    assert enf.deflection_on_path(p, cf, a_end) == pytest.approx(deflection * delta0, rel=1e-9)
+    assert enf.deflection_on_path(p, cf, a_end * (1 + 1e-6)) > enf.deflection_on_path(p, cf, a_end)  # stable
+    limit = p["geometry.length"] - 4 * h
+    try:
+        x_b = enf.window_end_placed(p, cf, d)
+    except CaseError as exc:
+        event("refused")
+        assert str(exc).startswith(f"load.final_deflection_factor = {deflection:g}: ")
+        assert a_end + p["dem.margin"] > limit
+        f_max = re.search(r"load.final_deflection_factor <= ([0-9.e+-]+)", str(exc))
+        if f_max:
+            enf.window_end_placed(dict(p, **{"load.final_deflection_factor": 0.995 * float(f_max[1])}), cf, d)
+        return
+    assert max(L, a_end) + p["dem.margin"] <= x_b * (1 + 1e-12) and x_b <= limit * (1 + 1e-12)
 
 
 def test_enf_says_when_beam_theory_does_not_apply(femdem):

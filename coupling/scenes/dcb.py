@@ -217,6 +217,7 @@ def evaluate(p: dict, h: dict, mode: str):
         "propagation_rms_error": bound(qoi["propagation_rms_error"], 0.10, src + ", propagation branch P(delta)"),
         "dissipated_energy_ratio": check(qoi["dissipated_energy_ratio"], 1.0, 0.05,
                                          "energy: interface work dissipated = GIc x new crack area"),
+        **dl.window_checks(qoi),
     }
     return qoi, checks
 

@@ -44,6 +44,7 @@ from fem_region import materials, mesh
 from fem_region.explicit import ExplicitDynamics
 from fem_region.node_to_face import NodeToFace, node_to_face
 
+from ..checks import bound
 from ..params import CaseError, Param
 from ..participants.coupled import coupled_simulation
 from ..participants.fem import (FEM_OPTIONS, cohesive_node_bonds, cohesive_penalty, energies_with, face_pair_mass,
@@ -538,6 +539,16 @@ def cohesive_zone_qoi(p: dict, h: dict, k: int, Gc: float, tau: float, mode: str
     if "window_end" in h:  # coupled: where the window ended last (m)
         out["window_end"] = float(np.asarray(h["window_end"])[-1])
     return out
+
+
+def window_checks(qoi: dict) -> dict:
+    """Coupled: the crack and its cohesive zone stayed inside the DEM window (no damage ever at
+    its last column). A crack that reaches the window's edge is arrested by the elastic far
+    field, and what it dissipates after that is the window's, not the specimen's."""
+    if "damage_at_zone_edge" not in qoi:
+        return {}
+    return {"damage_at_zone_edge": bound(qoi["damage_at_zone_edge"], 0.0, "the crack stays inside the DEM window "
+                                         "(damage at the window's last column, 0: none)")}
 
 
 def plot_crack_and_window(ax, along: np.ndarray, h: dict) -> None:

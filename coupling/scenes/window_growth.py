@@ -39,8 +39,8 @@ PARAMETERS: dict[str, Param] = {
     "zone.margin": Param(0.0, "zone.grow: how far the window reaches beyond where the index reaches zone.grow_at; "
                          "0: 4 arm thicknesses", unit="m", low=0.0),
     "dem.window_end": Param(0.0, "x of the DEM window's end; 0: the closed form's crack path and beyond it the "
-                            "larger of dem.margin and the cohesive zone (dcb), the load line plus dem.margin (enf, "
-                            "mixed_mode); with zone.grow, where it starts (0: a0 plus zone.margin)", unit="m", low=0.0),
+                            "larger of dem.margin and the cohesive zone (dcb; enf and mixed_mode: at least the load "
+                            "line plus dem.margin); with zone.grow, where it starts (0: a0 plus zone.margin)", unit="m", low=0.0),
 }
 
 
