@@ -14,8 +14,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from conftest import assert_checks
-from test_delamination_ranges import (BENDING_LOAD, COARSE, DCB_LOAD, MATERIAL, RADIUS, THICK, WIDE, bending_sets,
-                                      dcb_sets)
+from test_delamination_ranges import (BENDING_LOAD, COARSE, DCB_LOAD, MATERIAL, RADIUS, SUITE_RADIUS, THICK, WIDE,
+                                      bending_sets, dcb_sets)
 
 from coupling.case import load_case
 from coupling.params import CaseError
@@ -249,7 +249,7 @@ def test_a_bending_window_follows_the_crack_anywhere_in_its_ranges(femdem, case,
 
 @COARSE
 @given(m=MATERIAL, h=THICK, L_rel=st.floats(1.2, 2.0), a_rel=st.floats(0.4, 0.6), substeps=st.sampled_from([0, 1, 2]),
-       r=RADIUS, **BENDING_LOAD)
+       r=SUITE_RADIUS, **BENDING_LOAD)
 def test_an_enf_window_follows_the_crack_anywhere_in_its_ranges(femdem, m, h, L_rel, a_rel, substeps, r, pace,
                                                                  overhang, deflection):
     _follows(femdem, "enf_coarse", bending_sets(m, h, L_rel, a_rel, substeps, r, pace, overhang, deflection))
