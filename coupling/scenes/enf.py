@@ -113,6 +113,14 @@ def final_crack_length(p: dict, cf: dict) -> float:
         if target > delta[i] else a0
 
 
+def longest_zone(p: dict, cf: dict, d: float, keys: dict = dl.SCENE_KEYS) -> float:
+    """m, the longest cohesive zone estimate (delamination.cohesive_zone_length) of the modes
+    cf["modes"], with the strengths the law uses at bond spacing d (m)."""
+    Z0, R0 = dl.resolved_strengths(p, d, keys)
+    tau = {"I": (p["interface.GIc"], Z0), "II": (p["interface.GIIc"], R0)}
+    return max(dl.cohesive_zone_length(p, *tau[m], m) for m in cf["modes"])
+
+
 def window_end_placed(p: dict, cf: dict, d: float, keys: dict = dl.SCENE_KEYS) -> float:
     """m, the closed form's DEM window end: the load line plus dem.margin, or beam theory's
     final crack (final_crack_length) plus the larger of dem.margin and its longest cohesive
@@ -126,9 +134,7 @@ def window_end_placed(p: dict, cf: dict, d: float, keys: dict = dl.SCENE_KEYS) -
     window that cannot hold all of it is not refused: the check damage_at_zone_edge says
     whether it held."""
     L, h, a0 = p["geometry.half_span"], p["geometry.arm_thickness"], p["geometry.crack_length"]
-    Z0, R0 = dl.resolved_strengths(p, d, keys)
-    tau = {"I": (p["interface.GIc"], Z0), "II": (p["interface.GIIc"], R0)}
-    zone = max(dl.cohesive_zone_length(p, *tau[m], m) for m in cf["modes"])
+    zone = longest_zone(p, cf, d, keys)
     margin, a_end, limit = p["dem.margin"], final_crack_length(p, cf), p["geometry.length"] - 4 * h
     if a_end + margin > limit * (1 + 1e-12):
         a_max = limit - margin
