@@ -340,12 +340,68 @@ def test_a_plate_s_zone_grows_from_any_start(femdem, tmp_path, v, cells, grow_at
 
 @pytest.mark.parametrize("name, sets, key", [
     ("clamped_plate", {"zone.shape": "cylinder"}, "zone.shape"),
-    ("rod_impact_coarse", {}, "zone.grow"),
+    ("panel_buckling_coarse", {}, "zone.grow"),
+    ("rod_impact_coarse", {"zone.grow_to": 0.063}, "zone.grow_to"),  # past half the radius (60 mm)
+    ("rod_impact_coarse", {"zone.grow_to": 0.0445}, "zone.grow_to"),  # not whole spacings (3 mm) from 30 mm
+    ("rod_impact_coarse", {"zone.conversion": "release"}, "zone.conversion"),
 ])
 def test_growth_on_other_shapes_is_refused(femdem, name, sets, key):
     case = str(_plate()) if name == "clamped_plate" else name
-    code, s, err = femdem("run", case, *_sets(dict({"zone.grow": True}, **sets)))
+    code, s, err = femdem("run", case, "--mode=coupled", *_sets(dict({"zone.grow": True}, **sets)))
     assert code == 2 and key in err and ("allowed" in err or "known keys" in err) and s is None
+
+
+# the rod's 100 m/s with carbon/epoxy strengths in the zone's plies: the far field's Hoffman index
+# reaches grow_at (0.5) beyond the 30 mm square within 14 us
+DISC = {"zone.grow": True, "zone.ply_failure": True}
+
+
+def _element_volumes(region) -> float:
+    """m^3, the Hex8 mesh's volume by its own map (trilinear: 2-point Gauss is exact), apart
+    from the FEM's mass lumping."""
+    import skfem
+    basis = skfem.Basis(region.mesh, skfem.ElementHex1(), intorder=3)
+    return float(skfem.Functional(lambda w: 1.0 + 0.0 * w.x[0]).assemble(basis))
+
+
+def test_a_disc_s_square_zone_grows_keeping_momentum_and_mass():
+    """rod_impact_coarse coupled (LIGGGHTS, in process, to just past the first conversion): the
+    square grows in whole spacings over the reserve the O-grid keeps for it (the far field the
+    old one less cells), the conversion keeps the momentum to round-off, the far field's nodes
+    and the free particles carry rho (V + a^2 H), V the remaining elements' volume by their own
+    map and a^2 H the square's, and no far-field element within the zone's limit is left at
+    grow_at."""
+    case = load_case("rod_impact_coarse", dict(DISC, **{"clock.t_end": 1.6e-5}))
+    study, p = case.scene, case.parameters
+    sim = study.build(p, "coupled", "liggghts")
+    region0 = study.growth.built.dyn.region
+    try:
+        run_clock(sim)
+    finally:
+        sim.close()
+    growth = study.growth
+    assert growth.events and all(e[3] < 1e-12 for e in growth.events)
+    built, clock = growth.built, growth.built.clock
+    d, x, w = built.t, built.lattice.x, growth.half_width
+    assert w > p["zone.half_width"] and abs(w / d - round(w / d)) < 1e-6
+    assert x[:, 0].max() == pytest.approx(w) and x[:, 1].max() == pytest.approx(w)  # a square
+    region = built.dyn.region
+    kept = region0.n_elements - region.n_elements
+    assert kept == int(round((w / d) ** 2 - (p["zone.half_width"] / d) ** 2)) * sum(built.lam.plies) * \
+        p["mesh.elements_per_ply"]  # the old mesh less the square's new cells, through the thickness
+    free = clock.tie.free_particles(built.lattice.n).astype(bool)
+    mass = built.dyn.m.sum() + clock.dem.scene.mass[free].sum()
+    H = built.lam.thickness
+    assert mass == pytest.approx(built.lam.ply["rho"] * (_element_volumes(region) + w * w * H), rel=1e-12)
+    hashin, hoffman = growth._indices(region.centroid_strain_stress(clock.u_snapshot)[0])
+    inside = growth._x0 < growth.limit * (1 - 1e-9)  # the reserve's elements left
+    assert not inside.any() if w == pytest.approx(growth.limit) else hoffman[inside].max() < p["zone.grow_at"]
+
+
+def test_a_disc_resumed_after_a_conversion_finishes_as_the_uninterrupted_one(tmp_path):
+    """rod_impact_coarse, LIGGGHTS in process, the checkpoint at four fifths of 20 us (after the
+    conversion at 14 us)."""
+    _resumed_as_straight(tmp_path, "rod_impact_coarse", dict(DISC, **{"clock.t_end": 2e-5}), "liggghts", 0.8)
 
 
 RANGES = {"geometry.span": (40e-3, 80e-3), "impactors.cylinder.radius": (3e-3, 8e-3),

@@ -166,7 +166,7 @@ class Study:
                 raise CaseError(f"[{table}.{next(iter(names[table]))}]: geometry.shape = {shape!r} takes none")
         if shape in ("beam", "bonded_beam"):
             refuse.append(("mesh", "elements_width"))
-        growing = ("beam", "beam_3d", "plate") + BONDED  # a zone grown during the run about the centre
+        growing = ("beam", "beam_3d", "plate", "disc") + BONDED  # a zone grown during the run about the centre
         if shape not in ("beam", "beam_3d"):  # a zone about x = 0 placed from the estimate: beams'
             refuse += [("zone", "placement")] + ([] if shape in growing else [("zone", "grow_at")]) + \
                 ([] if shape in ("plate", "block") + growing else [("zone", "margin")])

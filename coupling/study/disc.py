@@ -14,7 +14,10 @@ node's stiffness is impactors.*.penalty times its share of the rod's face (rod_f
 Coupled: the square [0, zone.half_width]^2 under the rod through the whole thickness is a 3D
 ply lattice (dem_region/ply_block.py) with the laminate's interface law between plies, the
 rod on its top particles (its edge rounded by the particle radius), the FEM plate around it
-an O-grid whose hole is the zone's square exactly, tied at x = a and y = a.
+an O-grid whose hole is the zone's square exactly, tied at x = a and y = a. A zone that grows
+(zone.grow, study/growth.py) keeps a reserve: the O-grid's square is then the growth limit's
+(zone.grow_to, or half the radius), one element per particle spacing, so a grown zone's far
+field is the old one less the square's new cells and every remaining node keeps its state.
 
 Penalties are stiffness per area (Pa/m): a node gets penalty x its tributary area. This
 reading makes the paper's observations consistent: at 2e14 a surface node's contact mode
@@ -39,7 +42,7 @@ from ..params import CaseError
 from ..participants.coupled import coupled_simulation
 from ..participants.dem import hold_symmetry_planes
 from ..participants.fem import cohesive_node_bonds, energies_with, fem_only
-from .assemble import Built, body_of, interlaminar_law
+from .assemble import Built, body_of, check_growth, interlaminar_law
 from .closed_forms import SMALL_MASS, disc_mass_ratio
 from .schema import section
 
@@ -49,32 +52,52 @@ def core_cells(p: dict) -> int:
     return max(1, int(round(p["mesh.elements_along"] * p["zone.half_width"] / (0.5 * p["geometry.span"]))))
 
 
-def _map(u: np.ndarray, v: np.ndarray, p: dict, core: bool) -> tuple[np.ndarray, np.ndarray]:
+def grid(p: dict, core: bool, reserve: float = 0.0) -> tuple[np.ndarray, float, float, int]:
+    """(g (N + 1,), A m, s, c): the square grid's lines g on [0, 1] (both directions), the
+    square [0, s]^2 of the grid mapped onto [0, A]^2 of the plate, and the c x c cells of the
+    DEM zone's hole. Without a reserve A is the zone's half width over core_cells of
+    mesh.elements_along equal cells; with one (m, a zone that may grow to there, a whole number
+    of particle spacings d) the square is the reserve, one cell per d, so any grown zone's edge
+    is a grid line and its far field the old one less cells (study/growth.py), and the blend to
+    the rim keeps about its share of mesh.elements_along."""
+    n, R = p["mesh.elements_along"], 0.5 * p["geometry.span"]
+    if not reserve:
+        c = core_cells(p) if core else 0
+        return np.linspace(0.0, 1.0, n + 1), p["zone.half_width"], c / n, c
+    d = p["zone.particle_size"]
+    m, n_out = int(round(reserve / d)), max(2, int(round(n * (R - reserve) / R)))
+    s = m / (m + n_out)
+    g = np.concatenate([np.linspace(0.0, s, m + 1), np.linspace(s, 1.0, n_out + 1)[1:]])
+    return g, reserve, s, int(round(p["zone.half_width"] / d)) if core else 0
+
+
+def _map(u: np.ndarray, v: np.ndarray, p: dict, core: bool, A: float = 0.0, s: float = 0.0
+         ) -> tuple[np.ndarray, np.ndarray]:
     """The square grid [0, 1]^2 onto the quarter disc. Without a core:
     (u sqrt(1 - v^2 / 2), v sqrt(1 - u^2 / 2)). With one (an O-grid): the grid square
-    [0, s]^2 (s = core_cells / elements_along) onto the DEM zone's square [0, a]^2 exactly, and
-    each ray from it blended linearly from the square's side to the rim."""
+    [0, s]^2 onto the plate's square [0, A]^2 exactly (the DEM zone's, or the reserve it may
+    grow in: ``grid``), and each ray from it blended linearly from the square's side to the rim."""
     R = 0.5 * p["geometry.span"]
     if not core:
         return R * u * np.sqrt(1 - v**2 / 2), R * v * np.sqrt(1 - u**2 / 2)
-    a, s = p["zone.half_width"], core_cells(p) / p["mesh.elements_along"]
     rho = np.maximum(u, v)
     w = np.clip((rho - s) / (1 - s), 0.0, 1.0)[None]
     uv = np.array([u, v])
     with np.errstate(invalid="ignore", divide="ignore"):
-        square = np.nan_to_num(a * uv / rho)
+        square = np.nan_to_num(A * uv / rho)
         circle = np.nan_to_num(R * uv / np.hypot(u, v))
-    out = np.where(rho >= s, (1 - w) * square + w * circle, a * uv / s)
+    out = np.where(rho >= s, (1 - w) * square + w * circle, A * uv / s)
     return out[0], out[1]
 
 
-def disc_mesh(p: dict, lam, core: bool):
+def disc_mesh(p: dict, lam, core: bool, reserve: float = 0.0):
     """(Hex8 quarter disc, run of each element (nel,), interface node pairs (k, 2) lower /
-    upper, grid key (n_nodes,) of each node on the (n + 1)^2 surface grid). With cohesive
+    upper, grid key (n_nodes,) of each node on the (N + 1)^2 surface grid). With cohesive
     far-field interfaces the nodes on each interface between runs are doubled (the upper
-    run's elements take the twins). core: the DEM zone's square left out."""
-    n, m, tp = p["mesh.elements_along"], p["mesh.elements_per_ply"], lam.ply_thickness
-    g = np.linspace(0.0, 1.0, n + 1)
+    run's elements take the twins). core: the DEM zone's square left out; reserve: see grid."""
+    m, tp = p["mesh.elements_per_ply"], lam.ply_thickness
+    g, A, s, c = grid(p, core, reserve)
+    n = len(g) - 1
     box = mesh.box(g, g, np.linspace(0.0, lam.thickness, sum(lam.plies) * m + 1), "hex8")
     P, T = box.p, box.t
     levels = np.cumsum(lam.plies)[:-1] * tp  # interfaces between runs, bottom up
@@ -82,11 +105,11 @@ def disc_mesh(p: dict, lam, core: bool):
     cohesive = p[f"laminates.{p['geometry.laminate']}.far_field_interfaces"] == "cohesive"
     P, T, pairs = mesh.split_interfaces(P, T, run, levels if cohesive else [], 2, 1e-9 * tp)
     u, v = P[0].copy(), P[1].copy()
-    P[0], P[1] = _map(u, v, p, core)
-    key = np.round(v * n) * (n + 1) + np.round(u * n)
+    P[0], P[1] = _map(u, v, p, core, A, s)
+    line = lambda w: np.abs(np.subtract.outer(w, g)).argmin(axis=1)  # the grid line a coordinate is on
+    key = line(v) * (n + 1) + line(u)
     if core:  # drop the hole's elements, then the nodes no element uses
-        s = core_cells(p) / n
-        keep = np.maximum(u[T].mean(axis=0), v[T].mean(axis=0)) > s
+        keep = np.maximum(u[T].mean(axis=0), v[T].mean(axis=0)) > g[c]
         T, run = T[:, keep], run[keep]
         used = np.unique(T)
         renumber = np.full(P.shape[1], -1)
@@ -97,19 +120,17 @@ def disc_mesh(p: dict, lam, core: bool):
     return skfem.MeshHex1(np.ascontiguousarray(P), np.ascontiguousarray(T)), run, pairs, key.astype(int)
 
 
-def tributary_area(p: dict, core: bool) -> np.ndarray:
-    """((n + 1)^2,) m^2 by grid key: a quarter of each adjoining quad of the mapped surface grid
-    (none from the DEM zone's hole)."""
-    n = p["mesh.elements_along"]
-    g = np.linspace(0.0, 1.0, n + 1)
+def tributary_area(p: dict, core: bool, reserve: float = 0.0) -> np.ndarray:
+    """((N + 1)^2,) m^2 by grid key: a quarter of each adjoining quad of the mapped surface grid
+    (none from the DEM zone's hole); reserve: see grid."""
+    g, A, s, c = grid(p, core, reserve)
+    n = len(g) - 1
     U, V = np.meshgrid(g, g)  # row = v, column = u: key = row (n + 1) + column
-    xy = np.stack(_map(U, V, p, core), axis=-1)
+    xy = np.stack(_map(U, V, p, core, A, s), axis=-1)
     a = xy[1:, 1:] - xy[:-1, :-1]
     b = xy[:-1, 1:] - xy[1:, :-1]
     quad = 0.5 * np.abs(a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0])
-    if core:
-        c = core_cells(p)
-        quad[:c, :c] = 0.0
+    quad[:c, :c] = 0.0
     area = np.zeros((n + 1, n + 1))
     for di in (0, 1):
         for dj in (0, 1):
@@ -173,9 +194,9 @@ def quad_shares(X: np.ndarray, corners: np.ndarray, n: int, r: float, size: floa
     return np.bincount(corners.ravel(), share.ravel(), minlength=n)
 
 
-def _region(p: dict, lam, core: bool):
-    """(FEM plate, interface node pairs, grid key)."""
-    m, run, pairs, key = disc_mesh(p, lam, core)
+def _region(p: dict, lam, core: bool, reserve: float = 0.0):
+    """(FEM plate, interface node pairs, grid key); reserve: see grid."""
+    m, run, pairs, key = disc_mesh(p, lam, core, reserve)
     if p["fem.integration"] == "selective":
         raise CaseError("fem.integration = 'selective': a 90 ply couples normal and shear terms in 3D; "
                         "allowed full or reduced")
@@ -215,8 +236,17 @@ def rod(p: dict, name: str, H: float, penalty: float, rounding: float = 0.0) -> 
                          rounding=rounding)
 
 
-def disc(study, p: dict, mode: str, dem: str):
-    """(Simulation, Built) of the quarter disc in ``mode`` (fem or coupled)."""
+def grow_limit(p: dict, built: Built) -> float:
+    """The farthest a disc's grown zone may reach (m): zone.grow_to, or the last whole particle
+    spacing below half the plate's radius (beyond, the O-grid's elements at the square's corner
+    grow thin against the rim)."""
+    d = built.t
+    return p["zone.grow_to"] or (np.ceil(0.25 * p["geometry.span"] / d - 1e-9) - 1) * d
+
+
+def disc(study, p: dict, mode: str, dem: str, start=None):
+    """(Simulation, Built) of the quarter disc in ``mode`` (fem or coupled); start: the state a
+    coupled run continues from (a grown zone's, coupled_simulation's)."""
     built = body_of(p, mode)
     lam, H = built.lam, built.lam.thickness
     (support,) = study.layout.names["supports"]
@@ -237,23 +267,34 @@ def disc(study, p: dict, mode: str, dem: str):
         sim = fem_only(dyn, p, study.t_end, {})
         built.dyn, built.fem_elements, built.impactors = dyn, region.n_elements, {rod_name: striker}
     else:
-        block, scene, intra, inter, impactor = _particle_zone(p, built, rod_name, penalty)
-        area_by_key = tributary_area(p, core=True)
+        reserve = 0.0
+        if p.get("zone.grow"):
+            reserve = grow_limit(p, built)
+            check_growth(p, built.t, p["zone.half_width"], reserve, reserve <= 0.25 * p["geometry.span"],
+                         f"at most half the plate's radius ({0.25 * p['geometry.span']:g} m)")
+        block, scene, intra, inter, impactor = _particle_zone(p, built, rod_name, penalty, reserve)
+        area_by_key = tributary_area(p, core=True, reserve=reserve)
         made = []
 
         def make(extra_mass):
-            region, pairs, key = _region(p, lam, core=True)
+            region, pairs, key = _region(p, lam, core=True, reserve=reserve)
             dyn = ExplicitDynamics(region, supports=_supports(region, p), extra_mass=extra_mass)
             made.append(_node_bonds(p, lam, dyn, pairs, area_by_key[key[pairs[:, 0]]]))
+            built.fem_pairs = pairs
             return dyn
 
-        sim, clock = coupled_simulation(p, make, scene, dem, study.t_end, models=(intra, inter, impactor))
-        bonds, backend = made[-1], clock.dem
         i, j, _ = block.index.T
-        hold_symmetry_planes(backend, i, j, held=scene.groups["interface"])
+
+        def hold(backend) -> None:  # the symmetry planes, before the engine starts
+            hold_symmetry_planes(backend, i, j, held=scene.groups["interface"])
+
+        models = (intra, inter, impactor)
+        sim, clock = coupled_simulation(p, make, scene, dem, study.t_end, models=models, start=start, hold=hold)
+        bonds, backend = made[-1], clock.dem
         built.lattice, built.intra, built.inter, built.backend = block, intra, inter, backend
         built.column = np.maximum(i, j)  # the zone's edge: the largest
         built.dyn, built.fem_elements, built.impactors = clock.fem, clock.fem.region.n_elements, {rod_name: impactor}
+        built.clock, built.models = clock, models
         sim.counts.update({"law_bonds": len(intra.pairs)})
     ratio = disc_mass_ratio(study, p)
     if ratio < SMALL_MASS:
@@ -268,20 +309,22 @@ def disc(study, p: dict, mode: str, dem: str):
     return sim, built
 
 
-def _particle_zone(p: dict, built: Built, rod_name: str, penalty: float):
+def _particle_zone(p: dict, built: Built, rod_name: str, penalty: float, reserve: float = 0.0):
     """(block, scene, intralaminar LawBonds, interlaminar LawBonds, the rod on the particles):
     the square [0, a]^2 through the whole thickness; columns on x = 0, y = 0 (symmetry) and on
-    x = a, y = a (tied to the FEM) carry half cells."""
+    x = a, y = a (tied to the FEM) carry half cells. reserve (m): a growing zone's limit, which
+    the zone may reach (else it stays within twice the rod's radius)."""
     lam = built.lam
     a, d, tp = p["zone.half_width"], p["zone.particle_size"], lam.ply_thickness
     for key, length in (("laminates.*.ply_thickness", tp), ("zone.half_width", a)):
         if abs(length / d - round(length / d)) > 1e-6:
             raise CaseError(f"zone.particle_size = {d:g}: must divide {key} = {length:g} m")
     r = p[f"impactors.{rod_name}.radius"]
-    top = min(2 * r, 0.25 * p["geometry.span"])
-    if not top >= a > r + 2 * d:
+    top = reserve or min(2 * r, 0.25 * p["geometry.span"])
+    if not top * (1 + 1e-9) >= a > r + 2 * d:
+        limit = "zone.grow_to (or half the plate radius)" if reserve else "twice the rod radius or half the plate radius"
         raise CaseError(f"zone.half_width = {a:g}: allowed above the rod radius + 2 particles ({r + 2 * d:g} m) and "
-                        f"up to twice the rod radius or half the plate radius ({top:g} m)")
+                        f"up to {limit} ({top:g} m)")
     N, rows = int(round(a / d)) + 1, [int(round(n * tp / d)) for n in lam.plies]
     names = section(p, f"laminates.{p['geometry.laminate']}")
     try:

@@ -1,5 +1,5 @@
 """A damage zone that grows during the run (``zone.grow = true``; the beams and the bonded
-beams, 2D and 3D, and the plates' box zones).
+beams, 2D and 3D, the plates' box zones and the discs' squares).
 
 At each history sample the far field's failure indices are evaluated on the FEM's
 displacement at that FEM step: Hoffman's ply index when the zone's plies fail, and Hashin's
@@ -140,10 +140,12 @@ class Growth:
     def _extent(self, built) -> tuple[float, float, float]:
         """(particle spacing, the zone's growth limit, its margin) m."""
         from . import assemble, bonded
+        from .disc import grow_limit as disc_limit  # (the package's name disc is the assembler)
         p, bb = self.p, built.bonded
         H = built.lam.thickness if bb is None else bb.depth
-        self.plane = p["geometry.shape"] == "plate"  # a square zone about the centre, not a strip along x
-        limit = bonded.grow_limit(p, bb) if bb is not None else \
+        shape = p["geometry.shape"]
+        self.plane = shape in ("plate", "disc")  # a square zone about the centre, not a strip along x
+        limit = bonded.grow_limit(p, bb) if bb is not None else disc_limit(p, built) if shape == "disc" else \
             assemble.plate_grow_limit(p, built) if self.plane else assemble.grow_limit(p, built)
         return built.t, limit, p["zone.margin"] or max(4 * built.t, H)
 

@@ -228,10 +228,11 @@ def _debond_qoi(name, f, h):
 
 def _motion_series(built, name, f):
     """An impactor's velocity into the structure (m/s, positive towards it) and how far its face
-    has moved in (m)."""
+    has moved in (m) from where it started (its center: a grown zone's model is built with the
+    impactor already moved)."""
     imp = built.impactors[f["impactor"]]
     rigid = imp.imp if hasattr(imp, "imp") else imp
-    up, z0 = built.dim - 1, float(rigid.x[built.dim - 1])
+    up, z0 = built.dim - 1, float(rigid.center[built.dim - 1])
     return {f"{name}_velocity": lambda: float(-rigid.v[up]), f"{name}_displacement": lambda: float(-(rigid.x[up] - z0))}
 
 

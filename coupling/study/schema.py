@@ -318,7 +318,7 @@ SECTIONS: dict[str, dict[str, Param]] = {
                         "between them it bridges; a plate's or block's zone.shape = impactor: beyond the contact radius; 0: "
                         "the laminate's thickness (a contact's own stress field decays over about it; a bonded beam: its "
                         "depth; a block: the contact radius) or four particle sizes, the larger", unit="m", low=0.0, high=0.5),
-        "grow": Param(False, "grow the zone during the run (beams, bonded beams, a plate's box): at each history sample the far field's failure "
+        "grow": Param(False, "grow the zone during the run (beams, bonded beams, a plate's box, a disc's square): at each history sample the far field's failure "
                       "indices (as placement's) are evaluated, and elements whose index reaches grow_at within margin "
                       "of the zone's edge become particles, their state carried over (study/growth.py)", kind="bool"),
         "conversion": Param("rebuild", "how a grown zone's new particles enter the engine: rebuild (the engine is "
@@ -327,7 +327,7 @@ SECTIONS: dict[str, dict[str, Param]] = {
                             "released at its conversion; study/seeded.py)", kind="str", choices=("rebuild", "release")),
         "grow_to": Param(0.0, "the farthest the zone may grow; the far field is meshed at the particle spacing out to "
                          "it; 0: 0.8 x half the span (a plate: of the smaller half side; a bonded beam: four particle sizes short of "
-                         "the support)", unit="m", low=0.0),
+                         "the support; a disc: half its radius)", unit="m", low=0.0),
         "plies_per_particle": Param(1, "plies per particle row (the particle size is this x ply thickness; "
                                     "laminates)", kind="int", low=1, high=8),
         "particle_size": Param(0.0, "lattice spacing d (bonded beams, a block: the depth holds a whole number of "
