@@ -169,6 +169,11 @@ class WindowGrowth(Growth):
         at &= bonds.damage < 1.0  # (the crack's faces in contact: not a process zone)
         return float(bonds.X[bonds.pairs[at, 0], 0].max()) if at.any() else -1.0
 
+    def damage_reach(self) -> float:
+        """-1: the window's crack-plane bonds are contact_reach's (their damage is the crack the
+        window follows)."""
+        return -1.0
+
     def snap(self, x: float) -> float:
         x0, _, e = self._reserve
         return x0 + np.ceil((x - x0) / e - 1e-9) * e

@@ -135,7 +135,7 @@ class Growth:
     symmetric = True
     plane = False  # a plate's square zone (the distance from the centre is max(|x|, |y|))
     limit_name = "zone.grow_to"
-    reach_name = "the contact patch"  # what contact_reach measures
+    reach_name = "the contact patch or the zone's damage"  # what contact_reach and damage_reach measure
 
     def _extent(self, built) -> tuple[float, float, float]:
         """(particle spacing, the zone's growth limit, its margin) m."""
@@ -216,17 +216,30 @@ class Growth:
                 reach = max(reach, float(np.abs(x[touching, : 2 if self.plane else 1]).max()))
         return reach
 
+    def damage_reach(self) -> float:
+        """m: the farthest damaged bond of the zone whose damage the far field could not carry on
+        (probes.uncarried: the plies', and the interlaminar ones over tied far-field plies), by
+        its nearer end; -1 if none. Damage that comes within the margin of the edge grows the
+        zone as the far field's index does: the rod's punch through a disc cracks the plies
+        out from its edge before any element beyond reaches grow_at."""
+        from .probes import uncarried
+        x = self.built.lattice.x
+        r = np.abs(x[:, : 2 if self.plane else 1]).max(axis=1)
+        reach = [r[b.pairs[b.damage > 0]].min(axis=1).max(initial=-1.0) for b in uncarried(self.built)]
+        return float(max(reach, default=-1.0))
+
     def __call__(self, step: int):
-        """The Simulation of the grown zone if the far field or the contact asks for it at this
-        sample, else None: an element within the margin of the zone's edge at grow_at, or a
-        contact patch closer than the margin to the edge."""
+        """The Simulation of the grown zone if the far field, the contact or the zone's own damage
+        asks for it at this sample, else None: an element within the margin of the zone's edge
+        at grow_at, or a contact patch or damage the far field cannot carry on closer than the
+        margin to the edge."""
         clock = self.built.clock
         index = self.index(clock.u_snapshot)
         flagged = index >= self.grow_at
         w = self.half_width
         reach = grown_reach(self._x0[flagged], self._x1[flagged], w, self.margin)
-        contact = self.contact_reach()
-        near = contact >= 0 and contact + self.margin > w * (1 + 1e-9)  # (no contact: nothing to follow)
+        contact = max(self.contact_reach(), self.damage_reach())
+        near = contact >= 0 and contact + self.margin > w * (1 + 1e-9)  # (none: nothing to follow)
         if reach <= w * (1 + 1e-9) and not near:
             return None
         reach = max(reach, contact)

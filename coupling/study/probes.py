@@ -120,12 +120,22 @@ def _zone_edge_series(built, name, f):
     if built.inter is None:
         return {}
     column, last = built.column, built.column.max() - f["columns"]
-    families = [] if built.node_bonds is not None else [(built.inter, column[built.inter.pairs[:, 0]] >= last)]
-    plies_fail = built.lam is not None and not built.lam.elastic
-    if getattr(built, "edge_intra", False) or plies_fail:
-        families.append((built.intra, column[built.intra.pairs].min(axis=1) >= last))
+    families = [(b, column[b.pairs].min(axis=1) >= last) for b in uncarried(built)]
     families = [(b, edge) for b, edge in families if edge.any()]
     return {name: lambda: max((float(b.damage[edge].max()) for b, edge in families), default=0.0)}
+
+
+def uncarried(built) -> list:
+    """The zone's bond families (LawBonds) whose damage the far field cannot carry on: the
+    interlaminar (or adhesive) bonds unless the far field's plies are cohesive (a delamination
+    runs on into them), and the body's or plies' bonds (bonded beams; laminates whose plies
+    fail)."""
+    if built.inter is None:
+        return []
+    families = [] if built.node_bonds is not None else [built.inter]
+    if getattr(built, "edge_intra", False) or (built.lam is not None and not built.lam.elastic):
+        families.append(built.intra)
+    return families
 
 
 def _far_field_series(built, name, f):
