@@ -431,6 +431,25 @@ def test_a_disc_grown_answers_as_its_final_zone_fixed(femdem):
     assert abs(q["peak_plate_deflection"] / f["peak_plate_deflection"] - 1) < 0.05
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize("engine", ["yade", "lammps"])
+def test_a_disc_s_square_grows_on_every_engine(femdem, engine):
+    """rod_impact_coarse grown from 30 mm on the other engines (to 40 us, the strong plies): the
+    same conversions as on LIGGGHTS, momentum to round-off, the plate's deflection at the end
+    within 1 % of LIGGGHTS's (the engines integrate alike)."""
+    runs = []
+    for dem in ("liggghts", engine):
+        code, s, err = femdem("run", "rod_impact_coarse", "--mode=coupled", "--dem", dem,
+                              *_sets(dict(DISC_STRONG, **{"clock.t_end": 4e-5})))
+        assert code == 0, err
+        q = s["qoi"]
+        assert q["zone_conversions"] >= 1 and q["zone_conversion_momentum_jump"] < 1e-12
+        runs.append(q)
+    assert runs[1]["zone_conversions"] == runs[0]["zone_conversions"]
+    assert runs[1]["zone_grown_half_width"] == pytest.approx(runs[0]["zone_grown_half_width"])
+    assert abs(runs[1]["peak_plate_deflection"] / runs[0]["peak_plate_deflection"] - 1) < 0.01
+
+
 def test_a_disc_resumed_after_a_conversion_finishes_as_the_uninterrupted_one(tmp_path):
     """rod_impact_coarse, LIGGGHTS in process, the checkpoint at four fifths of 20 us (after the
     conversion at 14 us)."""

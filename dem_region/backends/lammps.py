@@ -216,16 +216,13 @@ class LammpsBackend(VerletArrays):
             self._advance_one(between)
 
     def _advance_one(self, between: Callable[[], None] | None) -> None:
+        if self._setup_needed:  # fixes added since the last run need a setup
+            self._setup_keeping_added()
         x_old = self._step_begin()
         self._to_engine()  # several ranks: what the hook and the added forces wrote
-        if self._setup_needed:  # fixes added since the last run need a setup
-            self._cmd("run 1 pre yes post no")
+        self.lmp.command("run 1 pre no post no")
+        if self._multi:
             self._views()
-            self._setup_needed = False
-        else:
-            self.lmp.command("run 1 pre no post no")
-            if self._multi:
-                self._views()
         self._step_end(x_old)
         self._hook_phase(between)
 

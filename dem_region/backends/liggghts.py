@@ -162,6 +162,7 @@ class LiggghtsBackend(VerletArrays):
     def start(self, between: Callable[[], None] | None = None) -> None:
         self._cmd("run 0")
         self._refresh_store()
+        self._setup_needed = False  # (the fixes added before it are set up)
         self._hook_phase(between)
 
     def advance(self, between: Callable[[], None] | None = None, steps: int = 1) -> None:
@@ -169,13 +170,10 @@ class LiggghtsBackend(VerletArrays):
             self._advance_one(between)
 
     def _advance_one(self, between: Callable[[], None] | None) -> None:
-        x_old = self._step_begin()
         if getattr(self, "_setup_needed", False):  # fixes added since the last run need a setup
-            self.lib.lammps_command(self.h, b"run 1 pre yes post no")
-            self._refresh_store()
-            self._setup_needed = False
-        else:
-            self.lib.lammps_command(self.h, b"run 1 pre no post no")
+            self._setup_keeping_added()
+        x_old = self._step_begin()
+        self.lib.lammps_command(self.h, b"run 1 pre no post no")
         self._step_end(x_old)
         self._hook_phase(between)
 
