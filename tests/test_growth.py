@@ -404,31 +404,33 @@ def test_a_disc_s_square_zone_grows_keeping_momentum_and_mass():
     assert not inside.any() if w == pytest.approx(growth.limit) else hoffman[inside].max() < p["zone.grow_at"]
 
 
-# plies at the strong end of the case's ranges and the rod at its slowest: the zone's own damage
-# grows the square from 30 mm (twice, to the limit) and the far field's Hoffman index stays low
+# plies at the strong end of the case's ranges and the rod at its slowest: the rod's face grows
+# the square from 30 mm at once, the zone's own damage then to the limit; the far field's
+# Hoffman index stays low
 DISC_STRONG = dict(DISC, **{"materials.table3.Yt": 80e6, "materials.table3.Yc": 250e6, "materials.table3.S12": 110e6,
                             "materials.table3.S23": 90e6, "impactors.rod.velocity": 50.0})
 
 
 @pytest.mark.slow
 def test_a_disc_grown_answers_as_its_final_zone_fixed(femdem):
-    """rod_impact_coarse grown from 30 mm against its final square fixed from t = 0 on the same
-    far-field mesh (80 s): the layers' peak separation within 1 %, the rod's final velocity within
-    1 % of its impact speed, the plate's peak deflection within 5 % (measured 0.02 %, 0.7 % and
-    3.6 %: the grown run's first 6 us in a 30 mm square crack its plies otherwise), momentum to
-    round-off at each conversion."""
-    code, s, err = femdem("run", "rod_impact_coarse", "--mode=coupled", *_sets(DISC_STRONG))
+    """rod_impact_coarse as the case has it (elastic plies, 100 m/s), grown from its 30 mm
+    square as the rod's face and the margin ask, against the final square fixed from t = 0 on
+    the same far-field mesh (65 s): the plate's peak deflection and the layers' peak separation
+    within 1 %, the rod's final velocity within 1 % of its impact speed (measured 0.57 %, 0.09 %,
+    0.6 %), momentum to round-off. (With failing plies the cracked plate's answer moves with the
+    zone's size itself, docs/limits.md: no grown run can be held to one fixed zone there.)"""
+    code, s, err = femdem("run", "rod_impact_coarse", "--mode=coupled", "--set=zone.grow=true")
     assert code == 0, err
     q = s["qoi"]
     assert q["zone_conversions"] >= 1 and q["zone_conversion_momentum_jump"] < 1e-12
-    code, fixed, err = femdem("run", "rod_impact_coarse", "--mode=coupled",
-                              *_sets(dict(DISC_STRONG, **{"zone.half_width": q["zone_grown_half_width"]})))
+    code, fixed, err = femdem("run", "rod_impact_coarse", "--mode=coupled", "--set=zone.grow=true",
+                              f"--set=zone.half_width={q['zone_grown_half_width']}")
     assert code == 0, err
     f = fixed["qoi"]
     assert f["zone_conversions"] == 0
-    assert abs(q["peak_layer_separation"] / f["peak_layer_separation"] - 1) < 0.01
-    assert abs(q["final_rod_velocity"] - f["final_rod_velocity"]) < 0.01 * DISC_STRONG["impactors.rod.velocity"]
-    assert abs(q["peak_plate_deflection"] / f["peak_plate_deflection"] - 1) < 0.05
+    for key in ("peak_plate_deflection", "peak_layer_separation"):
+        assert abs(q[key] / f[key] - 1) < 0.01, (key, q[key], f[key])
+    assert abs(q["final_rod_velocity"] - f["final_rod_velocity"]) < 0.01 * s["parameters"]["impactors.rod.velocity"]
 
 
 @pytest.mark.slow

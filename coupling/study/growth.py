@@ -203,7 +203,8 @@ class Growth:
     # -- at each sample -------------------------------------------------------------------------
     def contact_reach(self) -> float:
         """m: the farthest particle an impactor touches (its patch: 0 while it touches the
-        symmetry plane's column alone), -1 without contact."""
+        symmetry plane's column alone), -1 without contact; a flat-faced rod's patch is its face
+        (the particles under it) from the start, as placement takes a punch's."""
         reach = -1.0
         for m in self.built.impactors.values():
             x = self.built.backend.positions_of(m.ids)
@@ -212,7 +213,7 @@ class Growth:
                 a = np.asarray(m.imp.axis, float)
                 r = r - np.outer(r @ a, a) / (a @ a)
             touching = np.linalg.norm(r, axis=1) < m.imp.radius
-            if m.imp.shape in ("sphere", "cylinder") and touching.any():
+            if m.imp.shape in ("sphere", "cylinder", "rod") and touching.any():
                 reach = max(reach, float(np.abs(x[touching, : 2 if self.plane else 1]).max()))
         return reach
 
