@@ -276,26 +276,35 @@ def _plate():
     return Path(__file__).parent / "studies" / "clamped_plate.toml"
 
 
-def test_a_plate_s_square_zone_grows_keeping_momentum_and_mass():
-    """The clamped cross-ply plate (tests/studies/clamped_plate.toml) struck at 2.5 m/s from a
-    2.5 mm square (LIGGGHTS, in process, to just past the first conversion at 94 us): the zone
-    grows as a square in whole spacings, each conversion keeps the momentum to round-off, the far
-    field's nodes and the free particles carry the quarter plate's mass rho a b H / 4 exactly, and
-    no far-field element left reaches grow_at."""
-    case = load_case(str(_plate()), dict(PLATE, **{"clock.t_end": 1.1e-4}))
-    study, p = case.scene, case.parameters
+def _grown_square(case: str, sets: dict):
+    """(parameters, Growth, the first zone's FEM region) of ``case`` with ``sets`` run in process
+    on LIGGGHTS, once asserted: each conversion kept the momentum to round-off, and the zone is
+    a square of whole particle spacings."""
+    c = load_case(case, sets)
+    study, p = c.scene, c.parameters
     sim = study.build(p, "coupled", "liggghts")
+    region0 = study.growth.built.dyn.region
     try:
         run_clock(sim)
     finally:
         sim.close()
     growth = study.growth
     assert growth.events and all(e[3] < 1e-12 for e in growth.events)
-    built, clock = growth.built, growth.built.clock
-    d, x = built.t, built.lattice.x
-    w = growth.half_width
-    assert w > 2.5e-3 and abs(w / d - round(w / d)) < 1e-6
-    assert x[:, 0].max() == pytest.approx(w) and x[:, 1].max() == pytest.approx(w)  # a square
+    d, x, w = growth.built.t, growth.built.lattice.x, growth.half_width
+    assert abs(w / d - round(w / d)) < 1e-6
+    assert x[:, 0].max() == pytest.approx(w) and x[:, 1].max() == pytest.approx(w)
+    return p, growth, region0
+
+
+def test_a_plate_s_square_zone_grows_keeping_momentum_and_mass():
+    """The clamped cross-ply plate (tests/studies/clamped_plate.toml) struck at 2.5 m/s from a
+    2.5 mm square (LIGGGHTS, in process, past the first conversion at 59 us): the zone
+    grows as a square in whole spacings, each conversion keeps the momentum to round-off, the far
+    field's nodes and the free particles carry the quarter plate's mass rho a b H / 4 exactly, and
+    no far-field element left reaches grow_at."""
+    p, growth, _ = _grown_square(str(_plate()), dict(PLATE, **{"clock.t_end": 1.1e-4}))
+    built, clock, w = growth.built, growth.built.clock, growth.half_width
+    assert w > 2.5e-3
     free = clock.tie.free_particles(built.lattice.n).astype(bool)
     mass = built.dyn.m.sum() + clock.dem.scene.mass[free].sum()
     lam = built.lam
@@ -377,20 +386,9 @@ def test_a_disc_s_square_zone_grows_keeping_momentum_and_mass():
     and the free particles carry rho (V + a^2 H), V the remaining elements' volume by their own
     map and a^2 H the square's, and no far-field element within the zone's limit is left at
     grow_at."""
-    case = load_case("rod_impact_coarse", dict(DISC, **{"clock.t_end": 1.6e-5}))
-    study, p = case.scene, case.parameters
-    sim = study.build(p, "coupled", "liggghts")
-    region0 = study.growth.built.dyn.region
-    try:
-        run_clock(sim)
-    finally:
-        sim.close()
-    growth = study.growth
-    assert growth.events and all(e[3] < 1e-12 for e in growth.events)
-    built, clock = growth.built, growth.built.clock
-    d, x, w = built.t, built.lattice.x, growth.half_width
-    assert w > p["zone.half_width"] and abs(w / d - round(w / d)) < 1e-6
-    assert x[:, 0].max() == pytest.approx(w) and x[:, 1].max() == pytest.approx(w)  # a square
+    p, growth, region0 = _grown_square("rod_impact_coarse", dict(DISC, **{"clock.t_end": 1.6e-5}))
+    built, clock, d, w = growth.built, growth.built.clock, growth.built.t, growth.half_width
+    assert w > p["zone.half_width"]
     region = built.dyn.region
     kept = region0.n_elements - region.n_elements
     assert kept == int(round((w / d) ** 2 - (p["zone.half_width"] / d) ** 2)) * sum(built.lam.plies) * \
