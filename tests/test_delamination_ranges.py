@@ -280,6 +280,7 @@ def test_dcb_refuses_what_it_cannot_model(femdem, sets, key):
     (["--set=geometry.crack_length=0.01"], "geometry.crack_length"),  # a0 < 0.3 L
     (["--set=geometry.half_span=0.06"], "geometry.half_span"),  # 2L > length
     (["--set=geometry.length=0.15"], "geometry.length"),  # an overhang of 0.73 L
+    (["--set=geometry.length=0.1100032"], "geometry.length"),  # an overhang of 3.2 um: a sliver element
     (["--set=load.duration_periods=30"], "load.duration_periods"),  # past the verified pace
     (["--set=geometry.half_span=0.04", "--set=geometry.length=0.08", "--set=geometry.crack_length=0.02",
       "--set=load.final_deflection_factor=6", "--set=load.duration_periods=36"],
