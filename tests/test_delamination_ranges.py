@@ -402,6 +402,7 @@ SLB_CORNER = ["--set=damping.ratio=0", "--set=interface.R0=10e6", "--set=interfa
               "--set=material.G13=3e9"]
 
 
+@pytest.mark.slow  # 46 s (the suite's budget)
 def test_an_slb_whose_shear_strength_is_low_dissipates_the_mode_mix_s_toughness(femdem):
     """The corner a wide draw found (session 30): R0 = 10 MPa against Z0 = 12.6 MPa after the
     zone rule, where Turon et al. (2010) ask for Z0 sqrt(GIIc / GIc) = 17.8 MPa. With Z0 lowered

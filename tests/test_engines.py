@@ -372,6 +372,7 @@ def test_lammps_on_several_ranks_matches_one_rank(femdem):
             assert s2["qoi"][k] == pytest.approx(a, rel=1e-8, abs=1e-300), (case, k)
 
 
+@pytest.mark.slow  # 55 s (the suite's budget); the suite resumes a two-rank LAMMPS worker's models bit for bit
 def test_lammps_ranks_evaluate_the_law_bonds_of_their_atoms(femdem, tmp_path):
     """On two ranks the law bonds run inside the worker, each rank those whose first particle
     it owns (issue #20's per-rank laws: both shares nonempty, every bond on one rank), and the
