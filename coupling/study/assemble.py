@@ -761,11 +761,16 @@ def _plate_axis(w: float, half: float, n_zone: int, n: int, ratio: float) -> np.
     return np.concatenate([np.linspace(0.0, w, n_zone + 1)[:-1], mesh.graded(w, half, n, ratio, w)])
 
 
+def spacing_below(x: float, d: float) -> float:
+    """m, the last whole particle spacing d strictly below x (a growing zone's default limit)."""
+    return (np.ceil(x / d - 1e-9) - 1) * d
+
+
 def plate_grow_limit(p: dict, built: Built) -> float:
     """The farthest a plate's grown zone may reach (m): zone.grow_to, or the last whole particle
     spacing below 0.8 x the smaller half side (a zone's limit)."""
     d, half = built.t, 0.5 * min(p["geometry.span"], p["geometry.width"])
-    return p["zone.grow_to"] or (np.ceil(0.8 * half / d - 1e-9) - 1) * d
+    return p["zone.grow_to"] or spacing_below(0.8 * half, d)
 
 
 def _check_plate_growth(p: dict, built: Built, fp) -> None:

@@ -42,7 +42,7 @@ from ..params import CaseError
 from ..participants.coupled import coupled_simulation
 from ..participants.dem import hold_symmetry_planes
 from ..participants.fem import cohesive_node_bonds, energies_with, fem_only
-from .assemble import Built, body_of, check_growth, interlaminar_law
+from .assemble import Built, body_of, check_growth, interlaminar_law, spacing_below
 from .closed_forms import SMALL_MASS, disc_mass_ratio
 from .schema import section
 
@@ -240,8 +240,7 @@ def grow_limit(p: dict, built: Built) -> float:
     """The farthest a disc's grown zone may reach (m): zone.grow_to, or the last whole particle
     spacing below half the plate's radius (beyond, the O-grid's elements at the square's corner
     grow thin against the rim)."""
-    d = built.t
-    return p["zone.grow_to"] or (np.ceil(0.25 * p["geometry.span"] / d - 1e-9) - 1) * d
+    return p["zone.grow_to"] or spacing_below(0.25 * p["geometry.span"], built.t)
 
 
 def disc(study, p: dict, mode: str, dem: str, start=None):
