@@ -142,7 +142,7 @@ class YadeBackend:
         return self.scene.critical_dt()
 
     def set_dt(self, dt: float) -> None:
-        self.O.dt = float(dt)
+        self.O.dt = self._dt = float(dt)
 
     # -- stepping ----------------------------------------------------------------------------
     def _hook(self) -> None:
@@ -151,8 +151,12 @@ class YadeBackend:
 
     def start(self, between: Callable[[], None] | None = None) -> None:
         dt, self.O.dt = self.O.dt, 0.0  # a step of zero length: forces at x_0, then the hook
-        self.advance(between)
-        self.O.dt = dt
+        self._starting = True  # its hook reads forces at x_0 with YADE's iter still 0
+        try:
+            self.advance(between)
+        finally:
+            self._starting = False
+            self.O.dt = dt
 
     def advance(self, between: Callable[[], None] | None = None, steps: int = 1) -> None:
         self._between = between
@@ -268,11 +272,14 @@ class YadeBackend:
     def energies(self) -> dict[str, float]:
         """Kinetic energy of the free particles (prescribed ones belong to the FEM side) and
         elastic bond energy, J, both at the time level of the last force evaluation: YADE's
-        leapfrog velocities lag half a step, so v_k = v_{k-1/2} + dt/2 F_k / m."""
+        leapfrog velocities lag half a step, so v_k = v_{k-1/2} + dt/2 F_k / m, also in the
+        start's hook (a zero step), where a zone grown mid-run carries v_{k-1/2} and forces."""
         m = self.scene.mass.copy()
         v = self.velocities()
-        if self.O.iter > 0:
-            v += 0.5 * self.O.dt * self.forces(np.arange(self.scene.n)) / m[:, None]
+        evaluated = self.O.iter > 0 or getattr(self, "_starting", False)
+        if evaluated:
+            dt = getattr(self, "_dt", self.O.dt)
+            v += 0.5 * dt * self.forces(np.arange(self.scene.n)) / m[:, None]
         m[self.prescribed] = 0.0
         for i, comps in getattr(self, "_partial", {}).items():
             v[i, comps] = 0.0  # the driven components of partly prescribed particles
@@ -282,11 +289,11 @@ class YadeBackend:
         # the law's energy functions crash YADE before its first force evaluation (bonds are
         # built stress free); its shear energy divides by ks: bonds with ks = 0 are left out
         elastic, dissipated = 0.0, 0.0
-        if self.O.iter > 0 and self.scene.contact == "hertz_mindlin":
+        if evaluated and self.scene.contact == "hertz_mindlin":
             law = self.law
             elastic = law.normElastEnergy() + law.shearEnergy
             dissipated = law.normDampDissip + law.shearDampDissip + law.frictionDissipation
-        elif self.O.iter > 0:
+        elif evaluated:
             elastic = self.law.normElastEnergy()
             if self.scene.ks.min() > 0:
                 elastic += self.law.shearElastEnergy()
