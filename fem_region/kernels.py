@@ -81,15 +81,32 @@ def _tl_force_plane(u, conn, dN, dx, D, out, nloc):
 
 
 @kernel(inline="always")
-def _green_lagrange(u, conn, dN, voigt, e, q, H, E, dim, nloc, ns):
-    """At quadrature point q of element e: the displacement gradient H = du_i / dX_j (dim, dim)
-    and the Green-Lagrange strain E (ns,) in Voigt form, engineering shear, written in place."""
+def _gradient(u, conn, dN, e, q, H, dim, nloc):
+    """At quadrature point q of element e: the displacement gradient H = du_i / dX_j (dim, dim),
+    written in place."""
     for i in range(dim):
         for j in range(dim):
             acc = 0.0
             for a in range(nloc):
                 acc += u[conn[e, a], i] * dN[e, q, a, j]
             H[i, j] = acc
+
+
+@kernel(inline="always")
+def _det_F(H, dim):
+    """det F = det (I + H) of a displacement gradient H (dim, dim)."""
+    if dim == 2:
+        return (1.0 + H[0, 0]) * (1.0 + H[1, 1]) - H[0, 1] * H[1, 0]
+    a00, a11, a22 = 1.0 + H[0, 0], 1.0 + H[1, 1], 1.0 + H[2, 2]
+    return (a00 * (a11 * a22 - H[1, 2] * H[2, 1]) - H[0, 1] * (H[1, 0] * a22 - H[1, 2] * H[2, 0])
+            + H[0, 2] * (H[1, 0] * H[2, 1] - a11 * H[2, 0]))
+
+
+@kernel(inline="always")
+def _green_lagrange(u, conn, dN, voigt, e, q, H, E, dim, nloc, ns):
+    """At quadrature point q of element e: the displacement gradient H = du_i / dX_j (dim, dim)
+    and the Green-Lagrange strain E (ns,) in Voigt form, engineering shear, written in place."""
+    _gradient(u, conn, dN, e, q, H, dim, nloc)
     for s in range(ns):
         i, j = voigt[s, 0], voigt[s, 1]
         g = H[i, j] + H[j, i]
@@ -152,15 +169,51 @@ def total_lagrangian_energy(u, conn, dN, dx, D, voigt, det_min):
                     acc += D[e, s, t] * E[t]
                 w += E[s] * acc
             energy += 0.5 * w * dx[e, q]
-            if dim == 2:
-                det = (1.0 + H[0, 0]) * (1.0 + H[1, 1]) - H[0, 1] * H[1, 0]
-            else:
-                a00, a11, a22 = 1.0 + H[0, 0], 1.0 + H[1, 1], 1.0 + H[2, 2]
-                det = (a00 * (a11 * a22 - H[1, 2] * H[2, 1]) - H[0, 1] * (H[1, 0] * a22 - H[1, 2] * H[2, 0])
-                       + H[0, 2] * (H[1, 0] * H[2, 1] - a11 * H[2, 0]))
+            det = _det_F(H, dim)
             if det < det_min[e]:
                 det_min[e] = det
     return energy
+
+
+@kernel
+def smallest_det_F(u, conn, dN, det_min):
+    """Each element's smallest det F over one quadrature rule's points, min-reduced into
+    ``det_min`` (nel,): the inverted-element guard alone (run at every sample; the energy
+    pass's 6.9 ms against 1 ms on 4,800 Hex8 of four rules). u (n_nodes, dim) m; conn
+    (nel, nloc); dN (nel, nqp, nloc, dim) 1/m. Compiled with the element families' sizes as
+    constants, as total_lagrangian_force."""
+    nloc, dim = dN.shape[2], dN.shape[3]
+    if dim == 3 and nloc == 8:
+        _smallest_det_F(u, conn, dN, det_min, 3, 8)
+    elif dim == 3 and nloc == 4:
+        _smallest_det_F(u, conn, dN, det_min, 3, 4)
+    elif dim == 2 and nloc == 4:
+        _smallest_det_F(u, conn, dN, det_min, 2, 4)
+    elif dim == 2 and nloc == 3:
+        _smallest_det_F(u, conn, dN, det_min, 2, 3)
+    else:
+        _smallest_det_F(u, conn, dN, det_min, dim, nloc)
+
+
+@kernel(inline="always")
+def _smallest_det_F(u, conn, dN, det_min, dim, nloc):
+    nel, nqp = dN.shape[0], dN.shape[1]
+    H = np.empty((dim, dim))
+    ue = np.empty((nloc, dim))
+    for e in range(nel):
+        for a in range(nloc):  # gathered once for the element's points
+            for i in range(dim):
+                ue[a, i] = u[conn[e, a], i]
+        for q in range(nqp):
+            for i in range(dim):
+                for j in range(dim):
+                    acc = 0.0
+                    for a in range(nloc):
+                        acc += ue[a, i] * dN[e, q, a, j]
+                    H[i, j] = acc
+            det = _det_F(H, dim)
+            if det < det_min[e]:
+                det_min[e] = det
 
 
 @kernel

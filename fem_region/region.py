@@ -14,7 +14,7 @@ import skfem
 
 from .elements import ElementType
 from .hourglass import HourglassControl
-from .kernels import VOIGT_2D, VOIGT_3D, total_lagrangian_energy, total_lagrangian_force
+from .kernels import VOIGT_2D, VOIGT_3D, smallest_det_F, total_lagrangian_energy, total_lagrangian_force
 from .materials import voigt_blocks
 
 INTEGRATIONS = ("full", "selective", "reduced")
@@ -87,7 +87,7 @@ def _quadrature(mesh, etype: ElementType, rule, thickness: float, voigt: list[in
     basis = skfem.Basis(mesh, etype.element_cls(), elements=elements, **kw)
     N = np.stack([np.asarray(b[0]) for b in basis.basis], axis=-1)  # (nel, nqp, nloc)
     dN = np.stack([b[0].grad for b in basis.basis], axis=-1)  # (dim, nel, nqp, nloc)
-    return Quadrature(N, np.moveaxis(dN, 0, -1), basis.dx * thickness, voigt)
+    return Quadrature(N, np.ascontiguousarray(np.moveaxis(dN, 0, -1)), basis.dx * thickness, voigt)  # (the kernels stream it)
 
 
 @dataclass
@@ -198,7 +198,8 @@ class FemRegion:
         ke = 0.0
         for q in self.rules:
             B = strain_displacement(q.dN)
-            ke = ke + np.einsum("eqsa,est,eqtb,eq->eab", B, self._masked_D(q.voigt), B, q.dx)
+            # contracted pairwise (optimize): the four-operand loop took 5.8 s on 4,800 Hex8
+            ke = ke + np.einsum("eqsa,est,eqtb,eq->eab", B, self._masked_D(q.voigt), B, q.dx, optimize=True)
         if self.hg is not None:
             ke = ke + self.hg.stiffness(self.dim)
         return ke
@@ -311,7 +312,11 @@ class FemRegion:
     def inverted_elements(self, u: np.ndarray) -> np.ndarray:
         """Indices of elements whose deformation gradient has det F <= 0 at a quadrature point
         (the element turned inside out)."""
-        return np.flatnonzero(self._total_lagrangian_pass(u)[1] <= 0.0)
+        uc = np.ascontiguousarray(u, dtype=float)
+        det_min = np.full(self.n_elements, np.inf)
+        for q in self.rules:
+            smallest_det_F(uc, self._conn, q.dN, det_min)
+        return np.flatnonzero(det_min <= 0.0)
 
     def _total_lagrangian_pass(self, u: np.ndarray) -> tuple[float, np.ndarray]:
         """(St Venant-Kirchhoff strain energy J, each element's smallest det F (nel,)) at

@@ -448,6 +448,7 @@ def test_panel_buckling_coupled_holds_its_checks_over_its_ranges(femdem, dem, pa
     assert q["delamination_growth_left"] == pytest.approx(q["delamination_growth_right"], abs=2 * 2 * tp)
 
 
+@pytest.mark.slow  # 35 s (the suite's budget): the suite's all-FEM panel is its range draw, with these checks
 def test_panel_buckling_coarse(femdem):
     """Seed 5.2, coarse: the pre-buckling axial stiffness is E11 H b / L within 2 %; the 0_4
     film buckles at the thin-film load (its tips turning as a DCB arm's root, with shear) and
