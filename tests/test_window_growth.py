@@ -208,13 +208,19 @@ def _follows(femdem, case: str, sets: list[str]) -> None:
         tip = s["parameters"]["geometry.crack_length"] + q["crack_growth"]
         assert q["zone_grown_half_width"] >= tip + lead - 2 * s["parameters"]["zone.particle_size"] - 1e-9
     fixed = _run(femdem, case, *sets, f"--set=dem.window_end={q['zone_grown_half_width']!r}")["qoi"]
+    placed = _run(femdem, case, *sets)
     # the dissipation's slope is resolved to 1 % once the crack ran 20 bonds past the fit's start
     # (an SLB draw's 9 mm crack, 10 bonds fitted: 1.057 grown, never converted, against 1.046
-    # fixed at the same end; the grown window's law springs equal the engine's springs to 1e-7)
+    # fixed at the same end; the grown window's law springs equal the engine's springs to 1e-7).
+    # The grown window starts as the closed form's and ends as the fixed one: within 1 % of the
+    # two where they differ themselves (session 34, an ENF draw, L = 64 mm, its crack at 32 mm:
+    # peak load 2258.2 grown, converted after its peak, against 2258.3 in the closed form's
+    # window and 2286.2 in the window fixed from t = 0 at the grown end, 97 mm, 33 mm past the
+    # load line: how far a window reaches past the load line moves the ENF's peak, limits.md)
     resolved = q["crack_growth"] >= 24 * s["parameters"]["zone.particle_size"]
     for key in SAME_AS_FIXED if resolved else ("peak_load",):
-        assert abs(q[key] / fixed[key] - 1) < 0.01, (key, q[key], fixed[key])
-    placed = _run(femdem, case, *sets)
+        lo, hi = sorted((fixed[key], placed["qoi"][key]))
+        assert 0.99 * lo <= q[key] <= 1.01 * hi, (key, q[key], fixed[key], placed["qoi"][key])
     if case == "enf_coarse":  # the suite's coupled ENF draw (test_enf_holds_over_its_ranges with -m slow)
         assert_checks(placed)
     # (where the closed form's window misses its own checks the two need not agree: an SLB draw,
