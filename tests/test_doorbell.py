@@ -251,11 +251,14 @@ def test_an_interrupt_while_the_worker_advances_stops_its_advance(monkeypatch):
         steps, pause = 0, 1e-3
 
     class Interrupted(Backoff):
-        calls = 0
+        t0, raised = None, False
 
         def __call__(self, poll=None):
-            Interrupted.calls += 1
-            if Interrupted.calls == 200:
+            # once, 50 ms into the wait (its rounds are no clock: with wake-ups a round sleeps up
+            # to 0.1 s; a count of 200 rounds outlasted the 10 s advance in one CI run)
+            Interrupted.t0 = Interrupted.t0 or time.perf_counter()
+            if not Interrupted.raised and time.perf_counter() - Interrupted.t0 > 0.05:
+                Interrupted.raised = True
                 raise KeyboardInterrupt
             return super().__call__(poll)
 
