@@ -313,10 +313,12 @@ class FemRegion:
         """Indices of elements whose deformation gradient has det F <= 0 at a quadrature point
         (the element turned inside out)."""
         uc = np.ascontiguousarray(u, dtype=float)
-        det_min = np.full(self.n_elements, np.inf)
+        if getattr(self, "_det_min", None) is None or len(self._det_min) != self.n_elements:
+            self._det_min = np.empty(self.n_elements)  # (the guard runs at every sample)
+        self._det_min[:] = np.inf
         for q in self.rules:
-            smallest_det_F(uc, self._conn, q.dN, det_min)
-        return np.flatnonzero(det_min <= 0.0)
+            smallest_det_F(uc, self._conn, q.dN, self._det_min)
+        return np.flatnonzero(self._det_min <= 0.0)
 
     def _total_lagrangian_pass(self, u: np.ndarray) -> tuple[float, np.ndarray]:
         """(St Venant-Kirchhoff strain energy J, each element's smallest det F (nel,)) at
