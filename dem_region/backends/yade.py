@@ -65,6 +65,7 @@ class YadeBackend:
         self.version = self.yade.config.version
         self.O = self.yade.O
         self._between: Callable[[], None] | None = None
+        self._starting = False  # inside start's zero step (energies() completes the half step there too)
 
     # -- set-up ----------------------------------------------------------------------------
     def build(self, scene: DemScene) -> None:
@@ -276,7 +277,7 @@ class YadeBackend:
         start's hook (a zero step), where a zone grown mid-run carries v_{k-1/2} and forces."""
         m = self.scene.mass.copy()
         v = self.velocities()
-        evaluated = self.O.iter > 0 or getattr(self, "_starting", False)
+        evaluated = self.O.iter > 0 or self._starting
         if evaluated:
             dt = getattr(self, "_dt", self.O.dt)
             v += 0.5 * dt * self.forces(np.arange(self.scene.n)) / m[:, None]
