@@ -3,6 +3,7 @@
 Usage: .venv/bin/python benchmarks/coupled_step.py [--bonds 1e3 1e4 1e5 1e6] [--steps 20]
            [--repeat 5] [--runs beam_impact_coarse beam_impact] [--dem liggghts yade lammps]
            [--run-set clock.t_end=2e-4] [--ranks 1 2] [--skip-runs] [--skip-kernels] [--handshake]
+           [--parallel-from BONDS]
 
 1. Kernels: the 3D quarter beam's lattice (beam_impact_3d: Hoffman ply bonds and Hashin
    interface bonds with two tangents' slope terms), widened and lengthened until each family
@@ -218,6 +219,9 @@ def main():
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--threads", type=int, nargs="+", default=[1, 2])
     ap.add_argument("--noise", type=float, default=1e-4, help="random displacements / spacing")
+    ap.add_argument("--parallel-from", type=int, default=None, metavar="BONDS",
+                    help="families of this many bonds or more run the parallel build (law_kernels.PARALLEL_BONDS; "
+                         "0: every family, to find where it pays)")
     ap.add_argument("--runs", nargs="+", default=["beam_impact_coarse"])
     ap.add_argument("--dem", nargs="+", default=["liggghts", "yade", "lammps"])
     ap.add_argument("--run-set", action="append", default=[], metavar="KEY=VALUE",
@@ -231,6 +235,9 @@ def main():
     ap.add_argument("--handshake", action="store_true",
                     help="only the worker handshake between two processes, us per engine step")
     a = ap.parse_args()
+    if a.parallel_from is not None:
+        from physics import law_kernels
+        law_kernels.PARALLEL_BONDS = a.parallel_from
     if a.handshake:
         us = handshake(repeat=a.repeat)
         print(f"worker handshake alone: {statistics.median(us):.2f} us per engine step (median of {a.repeat}: "

@@ -253,6 +253,8 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
                 state["models"] = wire.loads(args[0])
                 if comm is not None and comm.Get_size() > 1:  # each rank the bonds of the atoms it owns
                     from dem_region.rank_laws import RankLaws
+                    from physics import law_kernels
+                    law_kernels.THREADS_ALLOWED = False  # the ranks are the parallelism (one core each)
                     state["ranks"] = RankLaws(comm, backend, state["models"])
                 state["view"] = ModelStep(backend, state["models"], state["ranks"])
                 conn.send(("ok",))

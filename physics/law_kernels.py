@@ -31,10 +31,15 @@ if "NUMBA_THREADING_LAYER" not in os.environ:
     # layer loads (and sets the OpenMP thread count) at the first parallel launch only.
     numba.config.THREADING_LAYER = "omp"
 
-PARALLEL_BONDS = 10_000  # families smaller than this run the serial build (no thread wake-ups)
+# families smaller than this run the serial build: below it a launch's wake-ups cost what the
+# second thread saves (2 threads against 1, ns per bond-step: 441 interface bonds 71 / 76, 693
+# 58 / 73, 3,063 ply bonds 31 / 43; 38 and 62 bonds 10-12 / 6 us a call; docs/benchmarks.md,
+# session 35)
+PARALLEL_BONDS = 1_000
 # False where an engine owns the process's OpenMP runtime (YADE: numba's OpenMP layer would set
 # its thread count at each launch, and a YADE step on more threads than asked sums its forces in
-# another order from run to run)
+# another order from run to run), and on an engine's several MPI ranks (each rank a process of
+# its own: threads in each would take more cores than the machine has)
 THREADS_ALLOWED = True
 HASHIN, PLY, ELASTIC = 0, 1, 2  # law families (ELASTIC: a PlyBondLaw that never initiates)
 FIXED, CENTRAL, FRAME_2D = 0, 1, 2  # kinematics: fixed normal, corotated central, corotated 2D frame
