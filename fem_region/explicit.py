@@ -14,7 +14,7 @@ from typing import Callable
 import numpy as np
 
 from .bulk_viscosity import BulkViscosity
-from .kernels import kinetic_energy as nodal_kinetic_energy
+from .kernels import add_first_columns, axpy, divide_rows, kinetic_energy as nodal_kinetic_energy
 from physics.impactor import RigidImpactor
 from physics.kernels import ball_on_nodes
 from .region import FemRegion
@@ -168,7 +168,7 @@ class ExplicitDynamics:
     # -- the phases of one step ----------------------------------------------------------------
     def half_kick(self, dt: float) -> None:
         """v += dt/2 a (nodes and impactors)."""
-        self.state.v += 0.5 * dt * self.state.a
+        axpy(self.state.v, 0.5 * dt, self.state.a)
         for imp in self.impactors:
             imp.v += 0.5 * dt * imp.a
 
@@ -178,7 +178,7 @@ class ExplicitDynamics:
         for imp in self.impactors:
             imp.x += dt * imp.v
         self._set_prescribed_velocities(s.t + 0.5 * dt)
-        s.u += dt * s.v
+        axpy(s.u, dt, s.v)
         s.t += dt
 
     def _set_prescribed_velocities(self, t: float) -> None:
@@ -217,21 +217,35 @@ class ExplicitDynamics:
         if self.impactors:
             self._contact(du, f)
         for model in self.node_forces:
-            f += model()[:, : self.region.dim]
-        a = np.divide(f, self.m[:, None], out=s.a)
+            add_first_columns(f, model())
+        a = s.a
+        divide_rows(f, self.m, a)
         if self._prescribed.size:
-            # the support supplies what the prescribed path needs beyond the residual force
-            a_pres = self._prescribed_acceleration()
-            if getattr(self, "_m_prescribed_of", None) is not self.m:  # the prescribed DOFs' masses, per mass array
-                self._m_prescribed, self._m_prescribed_of = self.m.repeat(self.region.dim)[self._prescribed], self.m
-            reaction = self._m_prescribed * a_pres - f.reshape(-1)[self._prescribed]
-            L.support_work += 0.5 * float(np.vdot(self._reaction_prev + reaction, du.reshape(-1)[self._prescribed]))
-            self._reaction_prev = reaction
-            a.reshape(-1)[self._prescribed] = a_pres
+            self._support_reaction(f, du, a)
         s.f_ext = f_ext
         self.f_int = f_int
         np.copyto(self._u_at_forces, s.u)  # the ledger's time level
         self._t_at_forces = s.t
+
+    def _support_reaction(self, f: np.ndarray, du: np.ndarray, a: np.ndarray) -> None:
+        """The prescribed DOFs: the support supplies what their path needs beyond the residual
+        force f (n_nodes, dim) N; its work over du (n_nodes, dim) m by the trapezoidal rule;
+        their accelerations into a. In the buffers of the prescribed DOFs (nothing allocated)."""
+        P, L = self._prescribed, self.ledger
+        a_pres = self._prescribed_acceleration()
+        if getattr(self, "_m_prescribed_of", None) is not self.m:  # the prescribed DOFs' masses, per mass array
+            self._m_prescribed, self._m_prescribed_of = self.m.repeat(self.region.dim)[P], self.m
+            self._pres_f, self._pres_w, *self._pres_r = (np.zeros(P.size) for _ in range(4))
+        r0, r1 = self._pres_r  # the reaction goes into the one the last step's is not in
+        reaction, f_p, work = r1 if self._reaction_prev is r0 else r0, self._pres_f, self._pres_w
+        np.take(f.reshape(-1), P, out=f_p, mode="clip")  # ("raise" copies through a temporary)
+        np.multiply(self._m_prescribed, a_pres, out=reaction)
+        np.subtract(reaction, f_p, out=reaction)
+        np.add(self._reaction_prev, reaction, out=work)
+        np.take(du.reshape(-1), P, out=f_p, mode="clip")  # (f_p now the DOFs' motion)
+        L.support_work += 0.5 * float(np.vdot(work, f_p))
+        self._reaction_prev = reaction
+        a.reshape(-1)[P] = a_pres
 
     def reaction(self, dofs: np.ndarray) -> float:
         """N, sum of the support reactions on flat DOFs ``dofs`` (all prescribed) at the last

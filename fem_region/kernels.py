@@ -217,6 +217,41 @@ def _smallest_det_F(u, conn, dN, det_min, dim, nloc):
 
 
 @kernel
+def add_columns(out, a, b):
+    """out[:, :c] = a + b, c = a.shape[1] <= out.shape[1]: (n, dim) values into the first
+    columns of (n, 3) arrays (2D FEM nodes as particles), where numpy's strided form takes a
+    temporary of the whole array each call."""
+    for i in range(a.shape[0]):
+        for k in range(a.shape[1]):
+            out[i, k] = a[i, k] + b[i, k]
+
+
+@kernel
+def add_first_columns(out, a):
+    """out += a[:, :c], c = out.shape[1] (forces of (n, 3) rows onto (n, dim) nodes), in place."""
+    for i in range(out.shape[0]):
+        for k in range(out.shape[1]):
+            out[i, k] += a[i, k]
+
+
+@kernel
+def axpy(y, a, x):
+    """y += a x in place (y, x (n, dim); a a scalar): numpy's ``y += a * x`` without its
+    temporary, the same product and sum."""
+    for i in range(y.shape[0]):
+        for k in range(y.shape[1]):
+            y[i, k] += a * x[i, k]
+
+
+@kernel
+def divide_rows(f, m, out):
+    """out = f / m[:, None]: f, out (n, dim); m (n,). numpy's broadcast form buffers."""
+    for i in range(f.shape[0]):
+        for k in range(f.shape[1]):
+            out[i, k] = f[i, k] / m[i]
+
+
+@kernel
 def respa_kicks(v, a, f_tie, band, m, dt, dt_fast, slow, kick, f_fast, a_slow):
     """The FEM's kicks of one DEM step of the impulse (r-RESPA) clock, in one pass:
     f_fast = f_tie - band; at a FEM step (``slow``) a_slow = a - (f_fast - f_tie) / m and

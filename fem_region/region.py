@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 import skfem
+from scipy.sparse._sparsetools import csr_matvec  # y += A x in place: scipy's kernel behind K @ x
 
 from .elements import ElementType
 from .hourglass import HourglassControl
@@ -237,11 +238,17 @@ class FemRegion:
         return f, added
 
     def internal_force(self, u: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
-        """u: (n_nodes, dim) m -> internal nodal force (n_nodes, dim) N: the linear form's sparse
-        product (scipy's: a numba loop of the same sums in the same order took 1.8 x as long),
-        the Total Lagrangian form's into ``out`` if given."""
+        """u: (n_nodes, dim) m -> internal nodal force (n_nodes, dim) N, into ``out`` if given
+        (nothing allocated). The linear form is the sparse product by scipy's own CSR kernel
+        (a numba loop of the same sums in the same order took 1.4-1.8 x as long; ``K @ u``, the
+        same kernel, allocates its result)."""
         if self.formulation == "linear":
-            return (self.K @ u.ravel()).reshape(u.shape)
+            if out is None:
+                return (self.K @ u.ravel()).reshape(u.shape)
+            K, y = self.K, out.reshape(-1)
+            y[:] = 0.0  # the kernel adds A x to y
+            csr_matvec(K.shape[0], K.shape[1], K.indptr, K.indices, K.data, np.ascontiguousarray(u).reshape(-1), y)
+            return out
         f = np.zeros(np.shape(u)) if out is None else out
         if out is not None:
             f[:] = 0.0

@@ -83,6 +83,7 @@ class CoupledClock:
         self._band = fem.region.element_force(self.band_elements) if self.band_elements.size else None
         shape = fem.state.v.shape  # the kicks' buffers (respa_kicks), rewritten at every DEM step
         self._f_fast, self._a_slow, self._no_band = np.zeros(shape), np.zeros(shape), np.zeros((0, shape[1]))
+        self._x_nodes = np.zeros(shape)  # the nodes' positions, m
         # one DEM step's work inside the engine's hook (after its forces at x_k, before it
         # moves), in this order; each stage is timed (summary.json "stages")
         self.hook_stages = [
@@ -111,7 +112,7 @@ class CoupledClock:
     def _read_interface(self) -> None:
         """The tie's forces from the particles on the FEM nodes at x_k (fast forces)."""
         fem = self.fem
-        self.f_tie = self.tie.fast_force(fem.region.X + fem.state.u)
+        self.f_tie = self.tie.fast_force(np.add(fem.region.X, fem.state.u, out=self._x_nodes))
 
     def _fem_forces(self) -> None:
         """The band's forces at every DEM step; at a FEM step (every m-th) the FEM's own

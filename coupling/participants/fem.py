@@ -8,7 +8,7 @@ import numpy as np
 from fem_region import mesh
 from fem_region.elements import ELEMENTS
 from fem_region.explicit import ExplicitDynamics
-from fem_region.kernels import face_forces, face_points
+from fem_region.kernels import add_columns, face_forces, face_points
 from fem_region.region import FORMULATIONS, INTEGRATIONS, FemRegion
 
 from ..params import CaseError, Param
@@ -130,7 +130,7 @@ class FemNodes:
         self.f = np.zeros((dyn.region.n_nodes, 3))
 
     def refresh(self) -> None:
-        np.add(self.dyn.region.X, self.dyn.state.u, out=self.x[:, : self.dyn.region.dim])
+        add_columns(self.x, self.dyn.region.X, self.dyn.state.u)  # (numpy's strided form: a temporary)
 
     def rows_of(self, ids):
         return ids

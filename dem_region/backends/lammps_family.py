@@ -351,7 +351,7 @@ class VerletArrays:
 
     def read_positions(self, ids: np.ndarray, out: np.ndarray) -> None:
         """out (k, 3) m <- the positions of particles ``ids`` (one bulk copy)."""
-        np.take(self.X, ids, axis=0, out=out)
+        np.take(self.X, ids, axis=0, out=out, mode="clip")  # "raise" copies through a temporary
 
     def _held_mask(self) -> np.ndarray:
         """(n,) bool: the fully prescribed set and the fixed group (rebuilt when the set changes)."""
