@@ -31,11 +31,14 @@ if "NUMBA_THREADING_LAYER" not in os.environ:
     # layer loads (and sets the OpenMP thread count) at the first parallel launch only.
     numba.config.THREADING_LAYER = "omp"
 
-# families smaller than this run the serial build: below it a launch's wake-ups cost what the
-# second thread saves (2 threads against 1, ns per bond-step: 441 interface bonds 71 / 76, 693
-# 58 / 73, 3,063 ply bonds 31 / 43; 38 and 62 bonds 10-12 / 6 us a call; docs/benchmarks.md,
-# session 35)
-PARALLEL_BONDS = 1_000
+# families smaller than this run the serial build: below it a launch's thread wake-ups cost what
+# the second thread saves. The kernels back to back pay from about 500 bonds (2 threads against
+# 1, ns per bond-step: 441 interface bonds 71 / 76, 3,063 ply bonds 31 / 43); inside a coupled
+# step, where the threads have slept through the engine's and the FEM's work, from about 1,500
+# (beam_impact, the models bucket with the ply family parallel / serial: a 2.7 mm zone, 1,003 ply
+# bonds, 4.31 / 4.11 s; 6 mm, about 2,200, 5.51 / 7.35 s; all-DEM, 9,198, 16.6 / 25.4 s;
+# docs/benchmarks.md, session 35)
+PARALLEL_BONDS = 1_500
 # False where an engine owns the process's OpenMP runtime (YADE: numba's OpenMP layer would set
 # its thread count at each launch, and a YADE step on more threads than asked sums its forces in
 # another order from run to run), and on an engine's several MPI ranks (each rank a process of
