@@ -8,7 +8,9 @@ floats: about 3 kB a stage whatever the size), so the check is against the model
 same case at twice the particles and twice the FEM nodes must not raise any stage's peak by a
 quarter of its smallest array (one coordinate per particle, or per node). Any array of the
 model's particles, nodes or bonds made in a step fails it (`np.take(..., out=)` under its
-default mode, a broadcast `np.divide(..., out=)`, `u += dt * v`: each a temporary of its size)."""
+default mode, a broadcast `np.divide(..., out=)`, `u += dt * v`: each a temporary of its size).
+YADE is left out: its Python API hands the positions over as new lists at every read
+(coordsAndDisplacements, one coordinate of every sphere a call), which no adapter can avoid."""
 import statistics
 import tracemalloc
 
