@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from physics.impactor import RigidImpactor
-from physics.kernels import ball_on_particles
+from physics.kernels import ball_leapfrog, ball_on_particles
 
 BALLS = ("sphere", "cylinder")  # the shapes with a compiled contact (a cylinder without an axis is a disc)
 
@@ -38,6 +38,8 @@ class ParticleImpactor:
         self._f_prev = np.zeros((len(self.ids), 3))
         self._X_prev = self.imp.x.copy()
         self._F_prev = np.zeros(3)
+        self._F_now = np.zeros(3)  # the compiled path's force on the impactor, each step
+        self._free = self.free.astype(float)  # (3,) 1.0 where the impactor moves
         self.time = 0.0
 
     def __getstate__(self) -> dict:
@@ -81,18 +83,23 @@ class ParticleImpactor:
                 started = False
             else:
                 started = True
-            imp = self.imp
-            F = np.empty(3)
+            imp, F = self.imp, self._F_now
             pen2, dwork = ball_on_particles(backend.x, backend.f, self._rows, self._x_now, self._f_now,
                                             self._x_prev, self._f_prev, started, dt, imp.x, imp.v,
                                             float(imp.radius), float(imp.penalty), float(imp.friction),
                                             float(imp.slip_velocity**2), F)
             self.stored = 0.5 * imp.penalty * pen2
-            if started:
-                self.work += 0.5 * (dwork + (self._F_prev + F) @ (imp.x - self._X_prev))
             # this step's state becomes the last one (buffers swapped, nothing allocated)
             self._x_prev, self._x_now, self._f_prev, self._f_now = self._x_now, self._x_prev, self._f_now, self._f_prev
-            self._X_prev, self._F_prev = imp.x.copy(), F
+            # its work over the last move, X_prev, F_prev <- this step's, and its leapfrog, in place
+            work = ball_leapfrog(imp.x, imp.v, F, self._X_prev, self._F_prev, float(imp.mass), self._free,
+                                 dt if dt > 0 else 0.0, started)
+            if started:
+                self.work += 0.5 * (dwork + work)
+            self.force = self._F_prev
+            if dt > 0:
+                self.time += dt
+            return
         else:
             x = backend.positions_of(self.ids)
             v = np.zeros_like(x) if self._x_prev is None or dt == 0 else (x - self._x_prev) / dt

@@ -312,6 +312,27 @@ def ball_on_particles(X, Fout, rows, x, f, x_prev, f_prev, started, dt, centre, 
 
 
 @kernel
+def ball_leapfrog(X, V, F, X_prev, F_prev, mass, free, dt, started):
+    """The rest of a ball's step after its contact forces F (3,) N, in place: the work of its
+    own force over its last move, (F_prev + F) . (X - X_prev) / 2 (returned, J; 0 before it
+    started), X_prev <- X, F_prev <- F, then the leapfrog V += dt F / M (the components
+    ``free`` (3,) 1.0, the held ones 0.0), X += dt V when dt > 0. The operations of the numpy
+    form, in its order (the dot product summed from the first component)."""
+    w = 0.0
+    if started:
+        for i in range(3):
+            w += (F_prev[i] + F[i]) * (X[i] - X_prev[i])
+    for i in range(3):
+        X_prev[i] = X[i]
+        F_prev[i] = F[i]
+    if dt > 0:
+        for i in range(3):
+            V[i] = V[i] + dt * F[i] / mass * free[i]
+            X[i] = X[i] + dt * V[i]
+    return w
+
+
+@kernel
 def numpy_sum(a):
     """np.sum of a contiguous (n,) array with numpy's digits: its reduction takes runs of 8192
     (the ufunc buffer) in turn, each summed pairwise."""
