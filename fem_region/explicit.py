@@ -14,9 +14,9 @@ from typing import Callable
 import numpy as np
 
 from .bulk_viscosity import BulkViscosity
-from .kernels import add_first_columns, axpy, divide_rows, kinetic_energy as nodal_kinetic_energy
+from .kernels import add_first_columns, axpy, divide_rows, scale_rows, kinetic_energy as nodal_kinetic_energy
 from physics.impactor import RigidImpactor
-from physics.kernels import ball_on_nodes
+from physics.kernels import add_at, ball_on_nodes
 from .region import FemRegion
 
 TimeFunction = Callable[[float], float]
@@ -126,6 +126,8 @@ class ExplicitDynamics:
         # the step's buffers, rewritten in place (the step allocates little: on small meshes a
         # step is ruled by the count of numpy operations, not their size)
         self._du, self._f_int, self._f = zero.copy(), zero.copy(), zero.copy()
+        self._f_ext = (zero.copy(), zero.copy())  # the loads of this step and the last, in turn
+        self._f_damp = zero.copy()
         self._a_rest = np.zeros(self._prescribed.size)  # the prescribed DOFs' acceleration when none moves
         self._moving = [sup for sup in self.supports if sup.velocity is not at_rest]
         rest = [sup.dofs for sup in self.supports if sup.velocity is at_rest]
@@ -159,10 +161,18 @@ class ExplicitDynamics:
             dt = 2.0 / w * (np.sqrt(1 + xi * xi) - xi)
         return dt
 
-    def external_force(self, t: float) -> np.ndarray:
-        f = np.zeros(self.region.ndof)
-        for load in self.loads:
-            np.add.at(f, load.dofs, np.asarray(load.amplitude) * load.curve(t))
+    def external_force(self, t: float, out: np.ndarray | None = None) -> np.ndarray:
+        """(n_nodes, dim) N of the loads at time t (s), into ``out`` if given (then nothing is
+        allocated: each load's values go through a buffer of its own)."""
+        f = np.zeros(self.region.ndof) if out is None else out.reshape(-1)
+        if out is not None:
+            f[:] = 0.0
+        if len(getattr(self, "_load_values", ())) != len(self.loads):  # (dofs, values) per load
+            self._load_values = [(np.ascontiguousarray(load.dofs, np.int64), np.empty(len(load.dofs)))
+                                 for load in self.loads]
+        for load, (dofs, values) in zip(self.loads, self._load_values):
+            np.multiply(load.amplitude, load.curve(t), out=values)
+            add_at(f, dofs, values)
         return f.reshape(-1, self.region.dim)
 
     # -- the phases of one step ----------------------------------------------------------------
@@ -204,9 +214,9 @@ class ExplicitDynamics:
         f_int = self.region.internal_force(s.u, out=self._f_int)
         du = np.subtract(s.u, self._u_at_forces, out=self._du)  # motion since the last force evaluation
         self._dt = s.t - self._t_at_forces
-        if self.loads:
-            f_ext = self.external_force(s.t)
-            L.external_work += 0.5 * float(np.vdot(s.f_ext + f_ext, du))
+        if self.loads:  # into the buffer the last step's loads are not in
+            f_ext = self.external_force(s.t, self._f_ext[1] if s.f_ext is self._f_ext[0] else self._f_ext[0])
+            L.external_work += 0.5 * float(np.vdot(np.add(s.f_ext, f_ext, out=self._f), du))
             f = np.subtract(f_ext, f_int, out=self._f)
         else:  # nothing applied: no work; s.f_ext stays zero
             f_ext, f = s.f_ext, np.negative(f_int, out=self._f)
@@ -368,8 +378,9 @@ class ExplicitDynamics:
         """(n_nodes, dim) N of Rayleigh damping, viscous hourglass control and bulk viscosity at
         velocity v, or None without any."""
         f = 0.0
-        if self.alpha:
-            f = self.alpha * self.m[:, None] * v
+        if self.alpha:  # alpha M v, in its buffer (the one term a run applies each step: no temporary)
+            f = self._f_damp
+            scale_rows(v, self.m, self.alpha, f)
         if self.beta:
             f = f + self.beta * (self.region.K @ v.ravel()).reshape(v.shape)
         hg = self.region.hourglass_viscous_force(v)

@@ -244,6 +244,16 @@ def axpy(y, a, x):
 
 
 @kernel
+def scale_rows(v, m, c, out):
+    """out = c m[:, None] v (v, out (n, dim); m (n,); c a scalar): numpy's ``c * m[:, None] * v``
+    without its temporaries, the same products in the same order."""
+    for i in range(v.shape[0]):
+        cm = c * m[i]
+        for k in range(v.shape[1]):
+            out[i, k] = cm * v[i, k]
+
+
+@kernel
 def divide_rows(f, m, out):
     """out = f / m[:, None]: f, out (n, dim); m (n,). numpy's broadcast form buffers."""
     for i in range(f.shape[0]):

@@ -31,6 +31,14 @@ def add_rows(target, ids, F):
 
 
 @kernel
+def add_at(target, ids, values):
+    """target[ids] += values for flat (k,) values, repeated ids summed in order (np.add.at,
+    without its overhead and its temporaries)."""
+    for r in range(ids.shape[0]):
+        target[ids[r]] += values[r]
+
+
+@kernel
 def add_slope_forces(f, loc, normal, q, a, b):
     """The work-conjugate forces of an interface slip's slope term, into f (n, 3) N: each
     bond's q (nb,) N acts along the normal of its neighbour pairs, -q on both particles of

@@ -1,7 +1,7 @@
 """The per-step hot path allocates nothing that grows with the model.
 
 Each stage of a clock step (the engine's step and the stages in its hook, the FEM's kicks,
-drift and forces, the interface's read and write, the laws) is measured by tracemalloc, which
+drift and forces with loads, supports and damping, the interface's read and write, the laws) is measured by tracemalloc, which
 numpy reports its arrays to: the stage's transient peak above the memory held before it, the
 median over the steps. Python's own small objects remain (a compiled call's boxed arguments,
 floats: about 3 kB a stage whatever the size), so the check is against the model's size: the
@@ -19,6 +19,7 @@ import pytest
 from coupling.case import load_case
 from coupling.simulation import run_clock
 
+# the coarse seed beam (an impactor, clamps, a cohesive far field) at two sizes
 SMALL = {"geometry.span": 40e-3, "zone.half_width": 5e-3, "mesh.elements_along": 20}
 LARGE = {"geometry.span": 80e-3, "zone.half_width": 10e-3, "mesh.elements_along": 40}
 # a few hundred steps; a history sample (the ledger's snapshot) at none of them after the first
@@ -41,9 +42,9 @@ def _measured(stage, peaks: dict) -> None:
         stage.repeat = None
 
 
-def _stage_peaks(mode: str, dem: str, size: dict) -> tuple[dict, dict]:
+def _stage_peaks(mode: str, dem: str, size: dict, name: str = "beam_impact_coarse") -> tuple[dict, dict]:
     """({stage: median transient bytes over the steps after the first ten}, counts)."""
-    case = load_case("beam_impact_coarse", {**size, **RUN})
+    case = load_case(name, {**size, **RUN})
     sim = case.scene.build(case.parameters, mode, dem)
     peaks: dict[str, list[int]] = {}
     for stage in sim.stages:
@@ -60,8 +61,17 @@ def _stage_peaks(mode: str, dem: str, size: dict) -> tuple[dict, dict]:
 @pytest.mark.parametrize("mode, dem", [("fem", "liggghts"), ("dem", "liggghts"), ("coupled", "liggghts"),
                                        ("coupled", "lammps")])
 def test_no_stage_allocates_with_the_model(mode, dem):
-    small, n_small = _stage_peaks(mode, dem, SMALL)
-    large, n_large = _stage_peaks(mode, dem, LARGE)
+    _same_at_both_sizes(_stage_peaks(mode, dem, SMALL), _stage_peaks(mode, dem, LARGE))
+
+
+def test_no_stage_allocates_with_the_model_under_loads_and_damping():
+    """The cantilever's tip load and its mass-proportional damping (dynamic relaxation)."""
+    sizes = ({"mesh.elements_along": 40, "mesh.elements_through": 2}, {"mesh.elements_along": 80, "mesh.elements_through": 4})
+    _same_at_both_sizes(*(_stage_peaks("fem", "liggghts", size, "cantilever") for size in sizes))
+
+
+def _same_at_both_sizes(small_run: tuple, large_run: tuple) -> None:
+    (small, n_small), (large, n_large) = small_run, large_run
     assert set(small) == set(large) and small, "the same stages at both sizes"
     # the smallest array a step could make of the larger model: one float per particle or node
     grew = [8 * (n_large[k] - n_small[k]) for k in ("particles", "fem_nodes") if n_large[k] > n_small[k]]
