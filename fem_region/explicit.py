@@ -173,7 +173,7 @@ class ExplicitDynamics:
         for load, (dofs, values) in zip(self.loads, self._load_values):
             np.multiply(load.amplitude, load.curve(t), out=values)
             add_at(f, dofs, values)
-        return f.reshape(-1, self.region.dim)
+        return f.reshape(-1, self.region.dim) if out is None else out  # (out itself: the step tells its buffers apart)
 
     # -- the phases of one step ----------------------------------------------------------------
     def half_kick(self, dt: float) -> None:

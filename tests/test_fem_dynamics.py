@@ -207,3 +207,24 @@ def test_inverted_elements_are_found():
     u[node] = [0.0, -0.04]
     bad = r.inverted_elements(u)
     assert bad.size > 0 and all(node in r.mesh.t[:, e] for e in bad)
+
+
+@pytest.mark.parametrize("steps", [150, 400])
+def test_a_ramped_load_s_work_closes_the_ledger(steps):
+    """A block clamped on one side, its other side pulled by nodal loads ramping from zero over
+    ``steps`` steps, undamped: the loads' work (the trapezoid of consecutive loads on each step's
+    motion) equals the kinetic plus strain energy to the scheme's O(dt^2). Taking this step's
+    load twice instead of the last one and this one, an error of about dt / T (1 / steps) of
+    the work, fails it (the buffers of consecutive loads confused)."""
+    from fem_region.explicit import NodalLoad
+    r = _block(2)
+    X = r.X
+    left, right = np.flatnonzero(np.isclose(X[:, 0], 0.0)), np.flatnonzero(np.isclose(X[:, 0], 0.1))
+    dyn = ExplicitDynamics(r, supports=[PrescribedMotion(np.concatenate([2 * left, 2 * left + 1]))])
+    dt = 0.9 * dyn.critical_dt()
+    T = steps * dt
+    dyn.loads.append(NodalLoad(2 * right, np.full(len(right), 1e3), lambda t: min(t / T, 1.0)))
+    _run(dyn, steps)
+    e = dyn.energies()
+    assert e["external_work"] > 0
+    assert abs(e["external_work"] - e["kinetic"] - e["internal"]) < 2e-4 * e["external_work"], e
