@@ -167,10 +167,11 @@ class ExplicitDynamics:
         f = np.zeros(self.region.ndof) if out is None else out.reshape(-1)
         if out is not None:
             f[:] = 0.0
-        if len(getattr(self, "_load_values", ())) != len(self.loads):  # (dofs, values) per load
-            self._load_values = [(np.ascontiguousarray(load.dofs, np.int64), np.empty(len(load.dofs)))
-                                 for load in self.loads]
-        for load, (dofs, values) in zip(self.loads, self._load_values):
+        plan = getattr(self, "_load_values", [])  # (load, its dofs, a buffer of its values) per load
+        if len(plan) != len(self.loads) or any(p[0] is not load for p, load in zip(plan, self.loads)):
+            plan = self._load_values = [(load, np.ascontiguousarray(load.dofs, np.int64), np.empty(len(load.dofs)))
+                                        for load in self.loads]
+        for load, dofs, values in plan:
             np.multiply(load.amplitude, load.curve(t), out=values)
             add_at(f, dofs, values)
         return f.reshape(-1, self.region.dim) if out is None else out  # (out itself: the step tells its buffers apart)
