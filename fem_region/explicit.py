@@ -161,12 +161,11 @@ class ExplicitDynamics:
             dt = 2.0 / w * (np.sqrt(1 + xi * xi) - xi)
         return dt
 
-    def external_force(self, t: float, out: np.ndarray | None = None) -> np.ndarray:
-        """(n_nodes, dim) N of the loads at time t (s), into ``out`` if given (then nothing is
-        allocated: each load's values go through a buffer of its own)."""
-        f = np.zeros(self.region.ndof) if out is None else out.reshape(-1)
-        if out is not None:
-            f[:] = 0.0
+    def external_force(self, t: float, out: np.ndarray) -> np.ndarray:
+        """``out`` (n_nodes, dim) N <- the loads at time t (s), returned itself (the step tells its
+        two buffers apart by identity); each load's values go through a buffer of its own."""
+        f = out.reshape(-1)
+        f[:] = 0.0
         plan = getattr(self, "_load_values", [])  # (load, its dofs, a buffer of its values) per load
         if len(plan) != len(self.loads) or any(p[0] is not load for p, load in zip(plan, self.loads)):
             plan = self._load_values = [(load, np.ascontiguousarray(load.dofs, np.int64), np.empty(len(load.dofs)))
@@ -174,7 +173,7 @@ class ExplicitDynamics:
         for load, dofs, values in plan:
             np.multiply(load.amplitude, load.curve(t), out=values)
             add_at(f, dofs, values)
-        return f.reshape(-1, self.region.dim) if out is None else out  # (out itself: the step tells its buffers apart)
+        return out
 
     # -- the phases of one step ----------------------------------------------------------------
     def half_kick(self, dt: float) -> None:
