@@ -10,6 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .kernels import add_bulk_viscosity_force
+
 
 @dataclass
 class BulkViscosity:
@@ -33,7 +35,8 @@ class BulkViscosity:
         vol = q.dx[:, 0]
         length = (vol / region.thickness) ** (1.0 / region.dim) if region.dim == 2 else vol ** (1 / 3)
         cmax = np.einsum("eii->ei", region.D)[:, : region.dim].max(axis=1)
-        return cls(q.dN[:, 0], vol, length, np.sqrt(cmax / region.rho), region.rho, region.mesh.t.T, C0, C1)
+        return cls(np.ascontiguousarray(q.dN[:, 0]), vol, length, np.sqrt(cmax / region.rho), region.rho,
+                   np.ascontiguousarray(region.mesh.t.T), C0, C1)
 
     def pressure(self, v: np.ndarray) -> np.ndarray:
         """(nel,) Pa for nodal velocities v (n_nodes, dim)."""
@@ -41,9 +44,14 @@ class BulkViscosity:
         d = np.minimum(d, 0.0)
         return self.rho * self.length * (self.C0 * self.length * d * d - self.C1 * self.c * d)
 
+    def add_force(self, v: np.ndarray, out: np.ndarray) -> None:
+        """out (n_nodes, dim) N += the resisting nodal force at nodal velocities v (added like a
+        damping force, so it is subtracted from the kick), in place."""
+        add_bulk_viscosity_force(self.b, self.vol, self.length, self.c, self.rho, self.conn, self.C0, self.C1,
+                                 np.ascontiguousarray(v, float), out)
+
     def force(self, v: np.ndarray) -> np.ndarray:
         """(n_nodes, dim) N, the resisting nodal force (to be subtracted like a damping force)."""
-        fe = -self.pressure(v)[:, None, None] * self.b * self.vol[:, None, None]
         out = np.zeros_like(v)
-        np.add.at(out, self.conn, fe)
+        self.add_force(v, out)
         return out

@@ -376,16 +376,19 @@ class ExplicitDynamics:
 
     def _damping_force(self, v: np.ndarray) -> np.ndarray | None:
         """(n_nodes, dim) N of Rayleigh damping, viscous hourglass control and bulk viscosity at
-        velocity v, or None without any."""
-        f = 0.0
-        if self.alpha:  # alpha M v, in its buffer (the one term a run applies each step: no temporary)
-            f = self._f_damp
+        velocity v, or None without any; in its buffer (nothing allocated per step)."""
+        if not (self.alpha or self.beta or self.region.viscous_hourglass or self.bulk_viscosity is not None):
+            return None
+        f = self._f_damp
+        if self.alpha:  # alpha M v
             scale_rows(v, self.m, self.alpha, f)
-        if self.beta:
-            f = f + self.beta * (self.region.K @ v.ravel()).reshape(v.shape)
-        hg = self.region.hourglass_viscous_force(v)
-        if hg is not None:
-            f = f + hg
+        else:
+            f[:] = 0.0
+        if self.beta:  # beta K v
+            if getattr(self, "_Kv", None) is None:
+                self._Kv = np.zeros_like(f)
+            axpy(f, self.beta, self.region.stiffness_times(v, self._Kv))
+        self.region.add_hourglass_viscous_force(v, f)
         if self.bulk_viscosity is not None:
-            f = f + self.bulk_viscosity.force(v)
-        return f if isinstance(f, np.ndarray) else None
+            self.bulk_viscosity.add_force(v, f)
+        return f

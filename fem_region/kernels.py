@@ -318,3 +318,47 @@ def face_forces(f, nodes, w, start):
         for a in range(nodes.shape[1]):
             for c in range(3):
                 f[nodes[q, a], c] += w[q, a] * f[start + q, c]
+
+
+@kernel
+def add_hourglass_force(gamma, coef, conn, u, scale, out):
+    """out += scale f_hg: the Flanagan-Belytschko control force f_e = coef_e gamma_e^T
+    (gamma_e u_e) of every element, scattered to its nodes in place (numpy's einsum and
+    scatter make three temporaries of the elements' size). gamma (nel, n_modes, nloc) -;
+    coef (nel,) N/m (stiffness form, u displacements m) or kg/s (viscous form, u velocities
+    m/s); conn (nel, nloc) nodes; u, out (n_nodes, dim)."""
+    nel, nm, nloc = gamma.shape
+    dim = u.shape[1]
+    for e in range(nel):
+        c = scale * coef[e]
+        if c == 0.0:
+            continue
+        for i in range(dim):
+            for m in range(nm):
+                q = 0.0  # the mode's generalised displacement along axis i
+                for a in range(nloc):
+                    q += gamma[e, m, a] * u[conn[e, a], i]
+                cq = c * q
+                for a in range(nloc):
+                    out[conn[e, a], i] += cq * gamma[e, m, a]
+
+
+@kernel
+def add_bulk_viscosity_force(b, vol, length, c, rho, conn, C0, C1, v, out):
+    """out -= q b vol: each compressed element's bulk-viscosity pressure q = rho l (C0 l d^2 -
+    C1 c d) (d < 0 its volumetric strain rate, 1/s) on its nodes, in place. b (nel, nloc, dim)
+    1/m centroid gradients; vol, length, c, rho (nel,) m^3, m, m/s, kg/m^3; conn (nel, nloc);
+    v, out (n_nodes, dim) m/s, N."""
+    nel, nloc, dim = b.shape
+    for e in range(nel):
+        d = 0.0
+        for a in range(nloc):
+            for i in range(dim):
+                d += b[e, a, i] * v[conn[e, a], i]
+        if d >= 0.0:
+            continue
+        q = rho[e] * length[e] * (C0 * length[e] * d * d - C1 * c[e] * d)
+        w = q * vol[e]
+        for a in range(nloc):
+            for i in range(dim):
+                out[conn[e, a], i] -= w * b[e, a, i]

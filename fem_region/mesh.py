@@ -168,7 +168,12 @@ def read_gmsh(path: str | Path, part: str) -> tuple[skfem.Mesh, dict[str, np.nda
     every physical group's node coordinates {name: (k, dim)} (for supports and loads named in
     the file). ValueError (what is wrong, what the file holds) if the part is missing."""
     import meshio
-    m = meshio.read(str(path))
+    if not Path(path).is_file():
+        raise OSError(f"no such file: {path}")
+    try:
+        m = meshio.read(str(path))
+    except Exception as exc:  # meshio's parsers raise what they meet (KeyError, IndexError, ...)
+        raise ValueError(f"meshio cannot read it ({type(exc).__name__}: {exc})") from None
     kinds = {"quad": skfem.MeshQuad1, "triangle": skfem.MeshTri1, "hexahedron": skfem.MeshHex1,
              "tetra": skfem.MeshTet1}
     groups = {k: v for k, v in m.cell_sets.items() if not k.startswith("gmsh:")}

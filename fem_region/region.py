@@ -15,11 +15,21 @@ from scipy.sparse._sparsetools import csr_matvec  # y += A x in place: scipy's k
 
 from .elements import ElementType
 from .hourglass import HourglassControl
-from .kernels import VOIGT_2D, VOIGT_3D, smallest_det_F, total_lagrangian_energy, total_lagrangian_force
+from .kernels import (VOIGT_2D, VOIGT_3D, add_hourglass_force, smallest_det_F, total_lagrangian_energy,
+                      total_lagrangian_force)
 from .materials import voigt_blocks
 
 INTEGRATIONS = ("full", "selective", "reduced")
 FORMULATIONS = ("linear", "total_lagrangian")
+
+
+def sparse_times(A: sp.csr_matrix, u: np.ndarray, out: np.ndarray) -> np.ndarray:
+    """out (n, dim) <- A u for u (n, dim), A (n dim, n dim) CSR: scipy's own kernel (the one
+    behind ``A @ u``, so the same digits) into the buffer, where ``A @ u`` allocates its result."""
+    y = out.reshape(-1)
+    y[:] = 0.0  # the kernel adds A x to y
+    csr_matvec(A.shape[0], A.shape[1], A.indptr, A.indices, A.data, np.ascontiguousarray(u).reshape(-1), y)
+    return out
 
 
 def strain_displacement(dN: np.ndarray) -> np.ndarray:
@@ -245,19 +255,22 @@ class FemRegion:
         if self.formulation == "linear":
             if out is None:
                 return (self.K @ u.ravel()).reshape(u.shape)
-            K, y = self.K, out.reshape(-1)
-            y[:] = 0.0  # the kernel adds A x to y
-            csr_matvec(K.shape[0], K.shape[1], K.indptr, K.indices, K.data, np.ascontiguousarray(u).reshape(-1), y)
-            return out
+            return sparse_times(self.K, u, out)
         f = np.zeros(np.shape(u)) if out is None else out
         if out is not None:
             f[:] = 0.0
         voigt = VOIGT_2D if self.dim == 2 else VOIGT_3D
+        uc = np.ascontiguousarray(u, dtype=float)
         for q, Dq in zip(self.rules, self._D_rules):
-            total_lagrangian_force(np.ascontiguousarray(u, dtype=float), self._conn, q.dN, q.dx, Dq, voigt, f)
+            total_lagrangian_force(uc, self._conn, q.dN, q.dx, Dq, voigt, f)
         if self.hg is not None and self.hg.form == "stiffness":
-            f += self._scatter(self.hg.force(self.hg.k, u[self.mesh.t.T]), u.shape)
+            add_hourglass_force(self.hg.gamma, self.hg.k, self._conn, uc, 1.0, f)
         return f
+
+    def stiffness_times(self, u: np.ndarray, out: np.ndarray) -> np.ndarray:
+        """out (n_nodes, dim) <- K u for u (n_nodes, dim) (the small-strain stiffness, whatever the
+        formulation: stiffness-proportional damping), nothing allocated."""
+        return sparse_times(self.K, u, out)
 
     def element_force(self, elements: np.ndarray):
         """The internal force of the elements ``elements`` (k,) alone, as a function
@@ -265,19 +278,18 @@ class FemRegion:
         Precomputed (a sparse stiffness, or the sliced kernel data). The Total Lagrangian form
         writes into one buffer of its own, overwritten by the next call: no allocation per call."""
         e = np.asarray(elements, int)
+        f = np.zeros((self.n_nodes, self.dim))
         if self.formulation == "linear":
             ed, ke = self._edofs[e], self.ke[e]
             r, c = np.repeat(ed, ed.shape[1], axis=1).ravel(), np.tile(ed, (1, ed.shape[1])).ravel()
             K = sp.csr_matrix((ke.ravel(), (r, c)), shape=(self.ndof, self.ndof))
-            return lambda u: (K @ u.ravel()).reshape(u.shape)
+            return lambda u: sparse_times(K, u, f)
         voigt = VOIGT_2D if self.dim == 2 else VOIGT_3D
         conn = np.ascontiguousarray(self._conn[e])
         rules = [(np.ascontiguousarray(q.dN[e]), np.ascontiguousarray(q.dx[e]), np.ascontiguousarray(D[e]))
                  for q, D in zip(self.rules, self._D_rules)]
         hg = self.hg if self.hg is not None and self.hg.form == "stiffness" else None
-        gamma, k = (hg.gamma[e], hg.k[e]) if hg else (None, None)
-
-        f = np.zeros((self.n_nodes, self.dim))
+        gamma, k = (np.ascontiguousarray(hg.gamma[e]), hg.k[e]) if hg else (None, None)
 
         def force(u: np.ndarray) -> np.ndarray:
             f[:] = 0.0
@@ -285,21 +297,18 @@ class FemRegion:
             for dN, dx, D in rules:
                 total_lagrangian_force(uc, conn, dN, dx, D, voigt, f)
             if hg is not None:
-                q = np.einsum("ema,eai->emi", gamma, u[conn])
-                fe = np.einsum("e,ema,emi->eai", k, gamma, q)
-                np.add.at(f, conn, fe)
+                add_hourglass_force(gamma, k, conn, uc, 1.0, f)
             return f
         return force
 
-    def _scatter(self, fe: np.ndarray, shape) -> np.ndarray:
-        """Element vectors (nel, n_loc, dim) -> assembled nodal array."""
-        return np.bincount(self._edofs.ravel(), np.reshape(fe, -1), minlength=self.ndof).reshape(shape)
+    @property
+    def viscous_hourglass(self) -> bool:
+        return self.hg is not None and self.hg.form == "viscous"
 
-    def hourglass_viscous_force(self, v: np.ndarray) -> np.ndarray | None:
-        """(n_nodes, dim) N of the viscous hourglass form at velocity v, or None."""
-        if self.hg is None or self.hg.form != "viscous":
-            return None
-        return self._scatter(self.hg.force(self.hg.c, v[self.mesh.t.T]), v.shape)
+    def add_hourglass_viscous_force(self, v: np.ndarray, out: np.ndarray) -> None:
+        """out (n_nodes, dim) N += the viscous hourglass form's force at velocity v, if that form."""
+        if self.viscous_hourglass:
+            add_hourglass_force(self.hg.gamma, self.hg.c, self._conn, np.ascontiguousarray(v, float), 1.0, out)
 
     def strain_energy(self, u: np.ndarray) -> float:
         """Stored elastic energy (J) at displacement u (n_nodes, dim) m."""

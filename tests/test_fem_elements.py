@@ -191,7 +191,37 @@ def test_hourglass_control_passes_patch_test(name, form):
     u = r.X @ G.T
     assert np.abs(r.internal_force(u)[interior]).max() < 1e-9 * np.abs(r.internal_force(u)).max()
     if form == "viscous":  # a uniform velocity gradient is not damped either
-        assert np.abs(r.hourglass_viscous_force(u)).max() < 1e-9 * r.hg.c.max()
+        f = np.zeros_like(u)
+        r.add_hourglass_viscous_force(u, f)
+        assert np.abs(f).max() < 1e-9 * r.hg.c.max()
+
+
+@pytest.mark.parametrize("name", ["quad4", "hex8"])
+@given(seed=st.integers(0, 2**31 - 1), scale=st.floats(1e-6, 1e-2))
+@settings(max_examples=10, deadline=None)
+def test_compiled_hourglass_and_bulk_viscosity_forces_equal_their_numpy_forms(name, seed, scale):
+    """The in-place kernels (the step's: add_hourglass_force, add_bulk_viscosity_force) against
+    the readable element forms (HourglassControl.force, BulkViscosity.pressure) scattered by
+    np.add.at, on a distorted mesh under a random field of any size."""
+    from fem_region.bulk_viscosity import BulkViscosity
+    from fem_region.kernels import add_hourglass_force
+
+    e = ELEMENTS[name]
+    m, _ = _mesh(name)
+    D = materials.reduce(materials.isotropic(1e9, 0.25), e.dim, "plane_strain")
+    r = FemRegion(m, e, D, 1000.0, 1.0, "reduced", hourglass="stiffness")
+    u = scale * np.random.default_rng(seed).standard_normal((r.n_nodes, e.dim))
+    conn = r.mesh.t.T
+    ref = np.zeros_like(u)
+    np.add.at(ref, conn, r.hg.force(r.hg.k, u[conn]))
+    got = np.zeros_like(u)
+    add_hourglass_force(r.hg.gamma, r.hg.k, np.ascontiguousarray(conn), u, 1.0, got)
+    np.testing.assert_allclose(got, ref, rtol=0, atol=1e-12 * np.abs(ref).max())
+    bv = BulkViscosity.of(r)
+    ref = np.zeros_like(u)
+    np.add.at(ref, conn, -bv.pressure(u)[:, None, None] * bv.b * bv.vol[:, None, None])
+    assert np.abs(ref).max() > 0  # some elements in compression
+    np.testing.assert_allclose(bv.force(u), ref, rtol=0, atol=1e-12 * np.abs(ref).max())
 
 
 def test_failure_indices_closed_forms():

@@ -42,9 +42,9 @@ def _measured(stage, peaks: dict) -> None:
         stage.repeat = None
 
 
-def _stage_peaks(mode: str, dem: str, size: dict, name: str = "beam_impact_coarse") -> tuple[dict, dict]:
+def _stage_peaks(mode: str, dem: str, size: dict, name: str = "beam_impact_coarse", settings: dict = {}) -> tuple[dict, dict]:
     """({stage: median transient bytes over the steps after the first ten}, counts)."""
-    case = load_case(name, {**size, **RUN})
+    case = load_case(name, {**size, **RUN, **settings})
     sim = case.scene.build(case.parameters, mode, dem)
     peaks: dict[str, list[int]] = {}
     for stage in sim.stages:
@@ -64,6 +64,26 @@ def test_no_stage_allocates_with_the_model(mode, dem):
     _same_at_both_sizes(_stage_peaks(mode, dem, SMALL), _stage_peaks(mode, dem, LARGE))
 
 
+# the paths a case file may choose beyond the defaults: the penalty tie; several DEM steps per
+# FEM step (the interface band's elements among the fast forces, linear and Total Lagrangian);
+# one-point elements with the stiffness or the viscous hourglass control (the band's elements are
+# the interface's, not the model's: its Total Lagrangian form writes into a buffer of its own)
+OPTIONS = {
+    "penalty tie": ("coupled", {"coupling.tie": "penalty", "clock.substeps": 2}),
+    "band, linear": ("coupled", {"clock.substeps": 3}),
+    "TL, hourglass stiffness": ("fem", {"fem.formulation": "total_lagrangian", "fem.integration": "reduced",
+                                        "fem.hourglass": "stiffness", "clock.t_end": 6e-6}),
+    "TL, hourglass viscous": ("fem", {"fem.formulation": "total_lagrangian", "fem.integration": "reduced",
+                                      "fem.hourglass": "viscous", "clock.t_end": 6e-6}),  # (before its guard)
+}
+
+
+@pytest.mark.parametrize("option", OPTIONS)
+def test_no_stage_allocates_with_the_model_on_the_options(option):
+    mode, settings = OPTIONS[option]
+    _same_at_both_sizes(*(_stage_peaks(mode, "liggghts", size, settings=settings) for size in (SMALL, LARGE)))
+
+
 def test_no_stage_allocates_with_the_model_under_loads_and_damping():
     """The cantilever's tip load and its mass-proportional damping (dynamic relaxation)."""
     sizes = ({"mesh.elements_along": 40, "mesh.elements_through": 2}, {"mesh.elements_along": 80, "mesh.elements_through": 4})
@@ -79,3 +99,40 @@ def _same_at_both_sizes(small_run: tuple, large_run: tuple) -> None:
     for name in small:
         assert large[name] - small[name] < min(grew) / 4, \
             f"stage {name}: {small[name]:.0f} B a step at {n_small}, {large[name]:.0f} B at {n_large}"
+
+
+def test_the_fem_step_allocates_nothing_under_stiffness_damping_and_bulk_viscosity():
+    """Stiffness-proportional (beta) damping, the bulk viscosity and the viscous hourglass
+    control, which no case file reaches (library options of ExplicitDynamics): the FEM's force
+    evaluation of a compressed block at two sizes."""
+    import numpy as np
+
+    from fem_region import materials, mesh
+    from fem_region.bulk_viscosity import BulkViscosity
+    from fem_region.elements import ELEMENTS
+    from fem_region.explicit import ExplicitDynamics
+    from fem_region.region import FemRegion
+
+    def peak(n: int) -> tuple[float, int]:
+        m = mesh.rectangle(np.linspace(0, 0.1, n + 1), np.linspace(0, 0.05, n // 2 + 1))
+        D = materials.reduce(materials.isotropic(1e9, 0.3), 2, "plane_strain")
+        r = FemRegion(m, ELEMENTS["quad4"], D, 1000.0, 0.01, "reduced", hourglass="viscous")
+        dyn = ExplicitDynamics(r, beta=1e-7, bulk_viscosity=BulkViscosity.of(r))
+        dyn.state.v[:] = -(r.X - r.X.mean(axis=0))  # compressed: the bulk viscosity acts
+        dyn.start()
+        dt, peaks = 0.5 * dyn.critical_dt(), []
+        tracemalloc.start()
+        try:
+            for _ in range(30):
+                dyn.kick_drift(dt)
+                held, _ = tracemalloc.get_traced_memory()
+                tracemalloc.reset_peak()
+                dyn.compute_forces()
+                peaks.append(tracemalloc.get_traced_memory()[1] - held)
+        finally:
+            tracemalloc.stop()
+        assert dyn.ledger.damping != 0.0  # the damping forces did work
+        return statistics.median(peaks[10:]), r.n_nodes
+
+    (small, n_small), (large, n_large) = peak(20), peak(40)
+    assert large - small < 8 * (n_large - n_small) / 4, (small, large)

@@ -558,6 +558,85 @@ def _runs_meshed_apart(path) -> str:
 COHESIVE = "--set=laminates.crossply.far_field_interfaces=cohesive"
 
 
+def _triangulated(path) -> str:
+    """gmsh_beam.msh with each quadrangle split into two triangles by its diagonal from its first
+    corner (Gmsh's counter-clockwise order kept), its physical groups as they are. Written as
+    Gmsh 4.1 by meshio; returns the path."""
+    import meshio
+    m = meshio.read(ROOT / "tests" / "studies" / "gmsh_beam.msh")
+    quads = np.vstack([c.data for c in m.cells if c.type == "quad"])
+    (roller,) = m.cells_dict["vertex"].ravel()
+    tri = np.vstack([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
+    tags = np.tile([2, 1], (len(m.points), 1))  # one surface entity (1), the roller's point (21), as _runs_meshed_apart's
+    tags[roller] = [0, 21]
+    meshio.write(path, meshio.Mesh(m.points, [("vertex", np.array([[roller]])), ("triangle", tri)],
+                                   point_data={"gmsh:dim_tags": tags},
+                                   cell_data={"gmsh:physical": [np.array([2]), np.ones(len(tri), int)],
+                                              "gmsh:geometrical": [np.array([21]), np.ones(len(tri), int)]},
+                                   field_data={"crossply": np.array([1, 2]), "rollers": np.array([2, 0])}),
+                 file_format="gmsh", binary=False)
+    return str(path)
+
+
+# the interfaces out of reach (strengths, toughness): the cohesive plies stay joined
+UNBREAKABLE = [f"--set=interfaces.epoxy.{k}" for k in ("Z0=1e10", "R0=1e10", "GIc=1e7", "GIIc=1e7")]
+
+
+def _dissipation_within_the_toughness_bounds(s: dict, interface: str, slice_: float) -> None:
+    """A cohesive far field's ledger (frictionless): the energy its interfaces dissipated, for the
+    whole beam (the model's share: a half slice ``slice_`` thick in 2D, a quarter in 3D), lies
+    between GIc x the debonded area and GIIc x the damaged area (a bond dissipates its B-K
+    toughness per area once traction-free, less before)."""
+    q, p = s["qoi"], s["parameters"]
+    W = p["geometry.width"]
+    whole = s["energy"]["dissipated"] * (4.0 if not slice_ else 2 * W / slice_)
+    debonded = sum(v for k, v in q.items() if k.startswith("delamination_area_"))
+    damaged = sum(v for k, v in q.items() if k.startswith("damaged_interface_length_")) * W
+    assert debonded > 0
+    assert p[f"interfaces.{interface}.GIc"] * debonded <= whole <= p[f"interfaces.{interface}.GIIc"] * damaged, \
+        (whole, debonded, damaged)
+
+
+def test_a_cohesive_far_field_of_triangles_holds_until_it_fails_and_then_dissipates_its_toughness(femdem, tmp_path):
+    """Issue #24's cohesive far field on T3 elements (the Gmsh beam's quadrangles split in two):
+    with its interfaces out of reach the plies meshed apart and joined by the law's node pairs
+    bend as plies sharing their nodes (peak deflection within 1 %); struck at 15 m/s without
+    friction its interfaces debond, dissipating between GIc x the debonded area and GIIc x the
+    damaged area; the ledger closed in both."""
+    tri = f"--set=mesh.file={_triangulated(tmp_path / 'tri.msh')}"
+    peaks = []
+    for far in ("tied", "cohesive"):
+        code, s, err = femdem("run", str(GMSH), "--mode", "fem", tri, *UNBREAKABLE,
+                              f"--set=laminates.crossply.far_field_interfaces={far}")
+        assert code == 0, err
+        assert_checks(s)
+        assert s["counts"]["fem_elements"] == 2 * _file_elements(0.0)
+        peaks.append(s["qoi"]["peak_deflection"])
+    assert abs(peaks[1] / peaks[0] - 1) < 0.01, peaks
+    code, s, err = femdem("run", str(GMSH), "--mode", "fem", tri, COHESIVE, "--set=impactors.striker.velocity=15",
+                          "--set=interfaces.epoxy.friction=0", "--set=impactors.striker.friction=0")
+    assert code == 0, err
+    assert s["energy"]["balance_error_rel"] < 1e-3
+    _dissipation_within_the_toughness_bounds(s, "epoxy", s["parameters"]["zone.plies_per_particle"] * 0.2e-3)
+
+
+def test_a_coupled_beam_is_tied_into_triangles(femdem, tmp_path):
+    """The coupled Gmsh beam (LIGGGHTS) with its far field of T3 elements and cohesive plies: the
+    zone's particles hosted in triangles, the beam's check (the spring-mass closed form), the
+    ledger closed, and the peak deflection within 3 % of the same beam of quadrangles (the same
+    nodes)."""
+    tri = f"--set=mesh.file={_triangulated(tmp_path / 'tri.msh')}"
+    peaks = []
+    for sets, per_quad in (([tri], 2), ([], 1)):
+        code, s, err = femdem("run", str(GMSH), "--mode", "coupled", "--dem", "liggghts", COHESIVE, *sets)
+        assert code == 0, err
+        assert_checks(s)
+        assert s["energy"]["balance_error_rel"] < 1e-3
+        assert s["counts"]["fem_elements"] == per_quad * _file_elements(6e-3)
+        peaks.append(s["qoi"]["peak_deflection"])
+    assert abs(peaks[0] / peaks[1] - 1) < 0.03, peaks
+
+
 @pytest.mark.parametrize("mode, dem", [("fem", None), ("coupled", "liggghts")])
 def test_ply_runs_meshed_apart_are_joined_node_to_face(femdem, tmp_path, mode, dem):
     """A mesh file whose ply runs are meshed apart (issue #24's non-matching meshes): with a
@@ -606,14 +685,32 @@ def test_ply_runs_meshed_apart_need_a_cohesive_far_field(femdem, tmp_path):
 SEED_3D = ROOT / "cases" / "seed" / "beam_impact_3d_coarse.toml"
 
 
-def _beam_3d_file(folder: Path, apart: bool) -> str:
+def _kuhn_tets(P: np.ndarray, H: np.ndarray) -> np.ndarray:
+    """Each axis-aligned hexahedron of H (nel, 8) nodes at P (n, 3) m, in any corner order, as
+    the six tetrahedra about its diagonal from its lowest to its highest corner (one per order
+    of the axes: conforming across the faces of a structured mesh), each of positive volume."""
+    X = P[H]  # (nel, 8, 3)
+    bits = (X > X.min(axis=1, keepdims=True) + 1e-12).astype(int) @ np.array([1, 2, 4])
+    corner = np.take_along_axis(H, np.argsort(bits, axis=1), axis=1)  # by bits (x, y, z) -> 0..7
+    tets = []
+    for a, b, _ in ((0, 1, 2), (0, 2, 1), (1, 0, 2), (1, 2, 0), (2, 0, 1), (2, 1, 0)):
+        tets.append(corner[:, [0, 1 << a, (1 << a) | (1 << b), 7]])
+    T = np.vstack(tets)
+    e1, e2, e3 = (P[T[:, k]] - P[T[:, 0]] for k in (1, 2, 3))
+    flip = np.einsum("ij,ij->i", np.cross(e1, e2), e3) < 0
+    T[flip, 1], T[flip, 2] = T[flip, 2], T[flip, 1].copy()
+    return T
+
+
+def _beam_3d_file(folder: Path, apart: bool, tets: bool = False) -> str:
     """beam_impact_3d_coarse's quarter strip (x 0..25 mm, y 0..1.5 mm, z 0..2.4 mm; runs
     [0_6/90_4/0_6] of 0.9 / 0.6 / 0.9 mm) meshed as Gmsh 4.1 hexahedra (physical group "beam",
     written by meshio) beside a copy of its case file that reads them. ``apart``: each run meshed
     on its own, no node shared at the runs' interfaces: the 0 runs 0.3 mm elements to x = 6 mm
     (the zone's edge), 14 beyond graded 1.15, 2 across, 3 through; the 90 run 0.4 mm, 10 beyond,
     3 across, 2 through. Else every run as the 0 runs (2 through the 90 run), sharing their
-    nodes. Returns the case file's path."""
+    nodes. ``tets``: shared nodes, each hexahedron as six tetrahedra (_kuhn_tets). Returns the
+    case file's path."""
     import meshio
     from fem_region import mesh as fem_mesh
     points, hexes = [], []
@@ -632,10 +729,11 @@ def _beam_3d_file(folder: Path, apart: bool) -> str:
                                       return_inverse=True)
         P, H = P[first], inverse.ravel()[H]
     to_gmsh = np.argsort([0, 4, 3, 1, 7, 5, 2, 6])  # scikit-fem's corner order to Gmsh's (read_gmsh's inverse)
-    meshio.write(folder / "beam.msh", meshio.Mesh(P, [("hexahedron", H[:, to_gmsh])],
+    cells = ("tetra", _kuhn_tets(P, H)) if tets else ("hexahedron", H[:, to_gmsh])
+    meshio.write(folder / "beam.msh", meshio.Mesh(P, [cells],
                                                   point_data={"gmsh:dim_tags": np.tile([3, 1], (len(P), 1))},
-                                                  cell_data={"gmsh:physical": [np.ones(len(H), int)],
-                                                             "gmsh:geometrical": [np.ones(len(H), int)]},
+                                                  cell_data={"gmsh:physical": [np.ones(len(cells[1]), int)],
+                                                             "gmsh:geometrical": [np.ones(len(cells[1]), int)]},
                                                   field_data={"beam": np.array([1, 3])}),
                  file_format="gmsh", binary=False)
     lines = SEED_3D.read_text().split("\n[mesh]\n", 1)
@@ -670,6 +768,58 @@ def test_3d_ply_runs_meshed_apart_answer_as_shared_nodes(femdem, tmp_path, mode,
     assert abs(w / w0 - 1) < 0.03 and abs(i / i0 - 1) < 0.02 and abs(a / a0 - 1) < 0.05, got
 
 
+SEED_UNBREAKABLE = [f"--set=materials.graphite_epoxy.{k}=1e11" for k in ("Xt", "Xc", "Yt", "Yc", "S12", "S23")] + \
+    [f"--set=interfaces.table1.{k}" for k in ("Z0=1e10", "R0=1e10", "GIc=1e7", "GIIc=1e7")]
+
+
+@pytest.mark.slow
+def test_a_cohesive_far_field_of_tetrahedra_holds_the_strip_together_until_it_fails(femdem, tmp_path):
+    """Issue #24's cohesive far field on Tet4 elements (the 3D seed strip's hexahedra as six
+    tetrahedra each), strengths out of reach: the plies meshed apart at their interfaces and
+    joined by the law's node pairs bend as plies sharing their nodes (peak deflection within 1 %)."""
+    case = Path(_beam_3d_file(tmp_path, apart=False, tets=True))
+    text = case.read_text()
+    case.write_text(text[: text.index("[ranges]")])  # (strengths outside the seed's ranges)
+    peaks = []
+    for far in ("tied", "cohesive"):
+        code, s, err = femdem("run", str(case), "--mode", "fem", *SEED_UNBREAKABLE,
+                              f"--set=laminates.beam.far_field_interfaces={far}")
+        assert code == 0, err
+        peaks.append(s["qoi"]["peak_centre_displacement"])
+    assert abs(peaks[1] / peaks[0] - 1) < 0.01, peaks
+
+
+@pytest.mark.slow
+def test_a_cohesive_far_field_of_tetrahedra_dissipates_its_toughness(femdem, tmp_path):
+    """The 3D seed strip all-FEM on Tet4 elements with cohesive plies, frictionless: its
+    interfaces debond, and what they dissipate lies between GIc x the debonded area and GIIc x
+    the damaged area (each pair stands for its share of the triangles of the faces on its
+    plane); the ledger closed."""
+    case = _beam_3d_file(tmp_path, apart=False, tets=True)
+    code, s, err = femdem("run", case, "--mode", "fem", "--set=interfaces.table1.friction=0",
+                          "--set=impactors.cylinder.friction=0")
+    assert code == 0, err
+    assert_checks(s)
+    assert s["counts"]["fem_elements"] == 6 * (20 + 14) * 2 * 8
+    assert s["energy"]["balance_error_rel"] < 1e-3
+    _dissipation_within_the_toughness_bounds(s, "table1", 0.0)
+
+
+def test_a_coupled_strip_is_tied_into_tetrahedra(femdem, tmp_path):
+    """The 3D seed strip coupled (LIGGGHTS) with its far field of Tet4 elements and cohesive
+    plies: the zone's particles hosted in tetrahedra, the ledger closed, the FEM the file's
+    tetrahedra right of the zone, and the delamination running on from the zone into the far
+    field (the damaged interface longer than the zone is wide)."""
+    case = _beam_3d_file(tmp_path, apart=False, tets=True)
+    code, s, err = femdem("run", case, "--mode", "coupled", "--dem", "liggghts")
+    assert code == 0, err
+    assert_checks(s)
+    assert s["energy"]["balance_error_rel"] < 1e-3
+    assert s["counts"]["fem_elements"] == 6 * 14 * 2 * 8
+    q, w = s["qoi"], s["parameters"]["zone.half_width"]
+    assert max(q["damaged_interface_length_0"], q["damaged_interface_length_1"]) > 4 * w, q
+
+
 @pytest.mark.parametrize("sets, words", [
     (["--set=zone.half_width=6.3e-3"], ["mesh.file", "cross x = 0.0063", "plane"]),
     (["--set=geometry.width=4.2e-3"], ["mesh.file", "spans x 0.006..0.025, y 0..0.0015", "allowed", "y 0..0.0021"]),
@@ -680,6 +830,20 @@ def test_a_3d_mesh_file_that_does_not_fit_is_refused(femdem, tmp_path, sets, wor
     assert code == 2 and s is None and err.count("\n") == 1, err
     for w in words:
         assert w in err, err
+
+
+def test_a_mesh_file_meshio_cannot_read_is_refused(femdem, tmp_path):
+    """A damaged .msh (cut off half way) is bad input: one line naming the key and the file,
+    exit 2, before anything is written (meshio's parser raises what it meets: a ValueError
+    here, a KeyError for an element of an undeclared entity, which was exit 1)."""
+    text = (ROOT / "tests" / "studies" / "gmsh_beam.msh").read_text()
+    bad = tmp_path / "bad.msh"
+    bad.write_text(text[: len(text) // 2])
+    out = tmp_path / "run"
+    code, s, err = femdem("run", str(GMSH), "--mode", "fem", f"--set=mesh.file={bad}", "--out", str(out))
+    assert code == 2 and s is None and err.count("\n") == 1, err
+    assert "mesh.file" in err and "bad.msh" in err and "cannot read" in err, err
+    assert not out.exists()
 
 
 @pytest.mark.parametrize("args, words", [

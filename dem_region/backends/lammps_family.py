@@ -331,12 +331,17 @@ class VerletArrays:
 
     def add_forces(self, ids: np.ndarray, F: np.ndarray) -> None:
         """Forces F (k, 3) N added to particles ``ids`` at this step (call from the hook). The
-        plan (which components of which rows take motion) is built once per ids array."""
+        plan (which components of which rows take motion) is built once per ids array and kept
+        per array: the models' and a penalty tie's write in turn at every step."""
         F = np.ascontiguousarray(F, float).reshape(-1, 3)
         key = (ids, self.dt, self._held_mask(), self._n_partial)  # a new set, step or prescription: a new plan
-        if getattr(self, "_plan_key", None) is None or any(a is not b for a, b in zip(key, self._plan_key)):
-            self._plan_key, self._plan = key, self._force_plan(np.asarray(ids, int))
-        rows, takes, mass = self._plan
+        plans = self.__dict__.setdefault("_plans", {})
+        known = plans.get(id(ids))
+        if known is None or any(a is not b for a, b in zip(key, known[0])):
+            if len(plans) > 8:  # (sets come and go with rebuilt models: keep the few in use)
+                plans.clear()
+            known = plans[id(ids)] = key, self._force_plan(np.asarray(ids, int))
+        rows, takes, mass = known[1]
         add_held_forces(self._added, self.F, self.V, rows, F, takes, 0.5 * self.dt, mass)
 
     def _force_plan(self, ids: np.ndarray):
@@ -352,6 +357,8 @@ class VerletArrays:
     def read_positions(self, ids: np.ndarray, out: np.ndarray) -> None:
         """out (k, 3) m <- the positions of particles ``ids`` (one bulk copy)."""
         np.take(self.X, ids, axis=0, out=out, mode="clip")  # "raise" copies through a temporary
+
+    positions_into = read_positions  # (the penalty tie's read of its particles, each step)
 
     def _held_mask(self) -> np.ndarray:
         """(n,) bool: the fully prescribed set and the fixed group (rebuilt when the set changes)."""
