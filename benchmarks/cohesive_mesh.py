@@ -4,13 +4,15 @@ in elements as the axis.
 
 The strengths are the case's own (interface.cohesive_zone_bonds = 0: not lowered to the mesh),
 so the cohesive zone has one physical length, the slender-arm estimate of
-delamination.cohesive_zone_length (mode I for the DCB, mode II for the ENF); each run meshes it
+delamination.cohesive_zone_length (mode I for the DCB, mode II for the ENF, the shorter of the
+two for the mixed-mode SLB, with the strengths its law uses); each run meshes it
 with N elements (mesh.element_length = l_cz / N). Spacings whose first element could not start
 softening (Gc below tau^2 / (2 K)) are refused by the case and reported as such. With
 --lowered the case keeps its rule instead (interface.cohesive_zone_bonds: strengths lowered so
 that Rice's zone spans that many elements, Turon et al. 2007), on the same element lengths.
 
-Usage: .venv/bin/python benchmarks/cohesive_mesh.py [--case dcb_coarse] [--n 2,4,8,16,32] [--lowered]
+Usage: .venv/bin/python benchmarks/cohesive_mesh.py [--case dcb_coarse|enf_coarse|mixed_mode_coarse]
+           [--n 2,4,8,16,32] [--lowered]
 Prints a markdown table (N, element length, peak load, its closed form, error, wall time, steps).
 """
 from __future__ import annotations
@@ -32,9 +34,15 @@ def zone_length(case: str) -> float:
     from coupling.case import load_case
     from coupling.scenes import delamination as dl
     p = load_case(case).parameters
+    GIc, GIIc, Z0, R0 = (p[f"interface.{k}"] for k in ("GIc", "GIIc", "Z0", "R0"))
     if case.startswith("dcb"):
-        return dl.cohesive_zone_length(p, p["interface.GIc"], p["interface.Z0"], "I")
-    return dl.cohesive_zone_length(p, p["interface.GIIc"], p["interface.R0"], "II")
+        return dl.cohesive_zone_length(p, GIc, Z0, "I")
+    if case.startswith("enf"):
+        return dl.cohesive_zone_length(p, GIIc, R0, "II")
+    # mixed mode (the SLB): the strengths the law uses, and the shorter of the two modes' zones
+    if p.get("interface.consistent_strengths", False):
+        Z0, R0 = dl.consistent(Z0, R0, GIc, GIIc)
+    return min(dl.cohesive_zone_length(p, GIc, Z0, "I"), dl.cohesive_zone_length(p, GIIc, R0, "II"))
 
 
 def run(case: str, length: float, out: Path, lowered: bool) -> tuple[dict | None, str, float]:

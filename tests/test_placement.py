@@ -150,3 +150,24 @@ def test_a_placed_zone_gives_the_all_dem_beam_at_the_seed_impact(femdem, span, r
 @example(span=20e-3, radius=3e-3, velocity=2.0, mass=0.3, dem="liggghts")  # the mildest corner
 def test_a_placed_zone_gives_the_all_dem_beam_on_every_engine(femdem, span, radius, velocity, mass, dem):
     _assert_placed_zone_gives_all_dem(*placed_against_all_dem(femdem, dem, span, radius, velocity, mass))
+
+
+@pytest.mark.slow
+def test_a_placed_zone_gives_the_all_dem_3d_strip(femdem):
+    """The 3D seed strip (beam_impact_3d_coarse: a quarter, Hex8 far field with cohesive plies)
+    coupled on LIGGGHTS with its zone placed from its all-FEM estimate, against all-DEM: the same
+    bounds as the 2D beam (deflection 6 %, impulse 5 %, force 25 %), no damage the far field
+    cannot carry at the zone's edge. Which 0/90 interface debonds is not asserted: on this strip
+    the two are a near tie that the far field's mesh decides (docs/status.md, #24 session 29)."""
+    runs = []
+    for mode, extra in (("coupled", ["--set=zone.placement=auto"]), ("dem", [])):
+        code, s, err = femdem("run", "beam_impact_3d_coarse", "--mode", mode, "--dem", "liggghts", *extra)
+        assert code == 0, err
+        assert_checks(s)
+        runs.append(s["qoi"])
+    H = 2.4e-3  # the laminate's thickness: the margin (above 4 particle sizes)
+    coupled, dem = runs
+    assert coupled["zone_estimate_reach"] + H <= coupled["zone_half_width"] + 1e-12
+    for qoi, tol in (("peak_centre_displacement", 0.06), ("contact_force_impulse", 0.05), ("peak_contact_force", 0.25)):
+        assert abs(coupled[qoi] / dem[qoi] - 1) < tol, (qoi, coupled[qoi], dem[qoi])
+    assert coupled["damage_at_zone_edge"] == 0.0
