@@ -576,3 +576,24 @@ def test_a_zone_grown_over_a_delaminating_far_field_carries_its_softening(femdem
 def test_a_run_resumed_after_a_conversion_finishes_as_the_uninterrupted_one_anywhere(tmp_path, name, sets, dem, at):
     """The same on YADE (in the default suite), on the 3D strip and on the plate's square zone."""
     _resumed_as_straight(tmp_path, str(_plate()) if name == "clamped_plate" else name, sets, dem, at)
+
+
+@pytest.mark.parametrize("name", ["cfrp_beam_impact", "cfrp_beam_impact_coarse"])
+@given(span_rows=st.integers(-40, 0))
+@settings(max_examples=8, deadline=None)
+def test_a_bonded_beam_s_zone_can_be_built_at_its_growth_limit(name, span_rows):
+    """The last whole spacing four short of the support (grow_limit, a grown zone's farthest
+    reach) is a zone the beam accepts, for the case's span and shorter ones (fractions of a row apart,
+    within its ranges): the full CFRP beam's limit, d floor(s / d - 4), reads an ulp past s - 4 d, and its
+    zone, grown there mid-run, was refused (the run ended with an error at 345.44 mm)."""
+    from coupling.study import bonded
+    case = load_case(name)
+    p = case.parameters
+    d = p["zone.particle_size"]
+    span = p["geometry.span"] + 0.37 * d * span_rows
+    case = load_case(name, {"geometry.span": span, "geometry.length": max(p["geometry.length"], span)})
+    p = case.parameters
+    limit = bonded.grow_limit(p, bonded.bonded_of(case.scene, p))
+    sim, built = case.scene.assemble(dict(p, **{"zone.half_width": limit, "zone.grow": False}), "coupled", "liggghts")
+    sim.close()
+    assert built.lattice.x[:, 0].max() == pytest.approx(limit, rel=1e-9)

@@ -164,7 +164,9 @@ def bonded_beam(study, p: dict, mode: str, dem: str, start=None):
         return _fem_beam(study, p, bb, built, curve, load_name), built
     L, s = bb.length / 2, bb.span / 2
     w = L if mode == "dem" else p["zone.half_width"]
-    if mode == "coupled" and not 4 * d <= w <= s - 4 * d:
+    # (the limits with the round-off of whole spacings: grow_limit's d floor(s / d - 4) may read
+    # an ulp past s - 4 d, and a zone grown to it was refused mid-run)
+    if mode == "coupled" and not 4 * d * (1 - 1e-9) <= w <= (s - 4 * d) * (1 + 1e-9):
         raise CaseError(f"zone.half_width = {w:g}: allowed from four particle sizes ({4 * d:g} m) to four short of "
                         f"the support ({s - 4 * d:g} m)")
     w = d * round(w / d)
