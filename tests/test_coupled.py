@@ -229,6 +229,23 @@ def test_penalty_tie_converges_to_the_kinematic_tie(femdem):
     assert errs[2] < 0.1 * errs[0]
 
 
+def test_a_penalty_tie_through_an_engine_s_worker_equals_the_in_process_one(femdem, tmp_path):
+    """The penalty tie reads its particles and writes their forces through the worker's shared
+    block (LIGGGHTS in a worker: the models hosted there, one rank) where it sent a message each
+    step: every history series the same to the bit as the engine in process."""
+    import h5py
+    runs = []
+    for k, process in enumerate(("in-process", "worker")):
+        code, s, err = femdem("run", "beam_impact_coarse", "--dem", "liggghts", "--set", "coupling.tie=penalty",
+                              "--set", f"dem.process={process}", "--set", "clock.t_end=3e-5")
+        assert code == 0, err
+        with h5py.File(tmp_path / f"run{k}" / "history.h5") as h:  # (the fixture's run directories)
+            runs.append({k: v[:] for k, v in h["history"].items()})
+    assert runs[0].keys() == runs[1].keys()
+    for k in runs[0]:
+        assert np.array_equal(runs[0][k], runs[1][k], equal_nan=True), k
+
+
 def test_stiff_penalty_tie_subcycled_does_not_resonate(femdem):
     """Hard case: a stiff penalty tie with 4 and 8 substeps (it resonated at m = 4 while the
     interface band's elements were slow forces) stays within 1 % of energy and of the

@@ -417,6 +417,16 @@ class RemoteBackend:
             self._share_model_particles(ids)
         out[:] = self._X_model
 
+    def positions_into(self, ids: np.ndarray, out: np.ndarray) -> None:
+        """out (k, 3) m <- positions of particles ``ids``, for the penalty tie each step: through
+        the models' shared block where it is free (the models hosted in the worker, one rank;
+        the worker writes the positions before each hook, applies the block's forces after it),
+        else by message."""
+        if self.ranks == 1 and (self._model_ids is None or ids is self._model_ids):
+            self.read_positions(ids, out)
+        else:
+            out[:] = self.positions_of(ids)
+
     def _shared_pair(self, k: int) -> tuple[list[str], list[np.ndarray]]:
         """Two new shared-memory blocks of (k, 3) float64 (released by finalize): names, arrays."""
         blocks = [new_block(max(8, 8 * 3 * k)) for _ in range(2)]
