@@ -1,7 +1,6 @@
 """Coupled FEM + DEM (YADE) runs and the transition-interface maps."""
 import numpy as np
 import pytest
-import skfem
 from hypothesis import given, settings, strategies as st
 
 from conftest import assert_checks
