@@ -26,9 +26,11 @@ FORMULATIONS = ("linear", "total_lagrangian")
 def sparse_times(A: sp.csr_matrix, u: np.ndarray, out: np.ndarray) -> np.ndarray:
     """out (n, dim) <- A u for u (n, dim), A (n dim, n dim) CSR: scipy's own kernel (the one
     behind ``A @ u``, so the same digits) into the buffer, where ``A @ u`` allocates its result."""
+    if not out.flags.c_contiguous:  # (a reshaped copy would take the result)
+        raise ValueError("sparse_times: out must be C-contiguous")
     y = out.reshape(-1)
     y[:] = 0.0  # the kernel adds A x to y
-    csr_matvec(A.shape[0], A.shape[1], A.indptr, A.indices, A.data, np.ascontiguousarray(u).reshape(-1), y)
+    csr_matvec(A.shape[0], A.shape[1], A.indptr, A.indices, A.data, np.ascontiguousarray(u, float).reshape(-1), y)
     return out
 
 
@@ -275,8 +277,8 @@ class FemRegion:
     def element_force(self, elements: np.ndarray):
         """The internal force of the elements ``elements`` (k,) alone, as a function
         u (n_nodes, dim) m -> (n_nodes, dim) N; with every element it is ``internal_force``.
-        Precomputed (a sparse stiffness, or the sliced kernel data). The Total Lagrangian form
-        writes into one buffer of its own, overwritten by the next call: no allocation per call."""
+        Precomputed (a sparse stiffness, or the sliced kernel data); either form writes into one
+        buffer of its own, overwritten by the next call: no allocation per call."""
         e = np.asarray(elements, int)
         f = np.zeros((self.n_nodes, self.dim))
         if self.formulation == "linear":

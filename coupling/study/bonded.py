@@ -164,12 +164,12 @@ def bonded_beam(study, p: dict, mode: str, dem: str, start=None):
         return _fem_beam(study, p, bb, built, curve, load_name), built
     L, s = bb.length / 2, bb.span / 2
     w = L if mode == "dem" else p["zone.half_width"]
-    # (the limits with the round-off of whole spacings: grow_limit's d floor(s / d - 4) may read
-    # an ulp past s - 4 d, and a zone grown to it was refused mid-run)
+    given, w = w, d * round(w / d)
+    # (the zone as built, whole spacings, within the limits with their round-off: grow_limit's
+    # d floor(s / d - 4) may read an ulp past s - 4 d, and a zone grown to it was refused mid-run)
     if mode == "coupled" and not 4 * d * (1 - 1e-9) <= w <= (s - 4 * d) * (1 + 1e-9):
-        raise CaseError(f"zone.half_width = {w:g}: allowed from four particle sizes ({4 * d:g} m) to four short of "
-                        f"the support ({s - 4 * d:g} m)")
-    w = d * round(w / d)
+        raise CaseError(f"zone.half_width = {given:g}: allowed from four particle sizes ({4 * d:g} m) to four short "
+                        f"of the support ({s - 4 * d:g} m), in whole particle sizes")
     tied = mode == "coupled"
     grow = tied and p.get("zone.grow", False)
     if grow:

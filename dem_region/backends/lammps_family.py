@@ -131,7 +131,9 @@ class VerletArrays:
             self._broken += [(int(a), int(b), self._time, *m) for a, b, m in zip(i[newly], j[newly], mid.tolist())]
         f = np.where(self._brittle_alive, f, np.minimum(f, 0.0))  # broken: contact in compression only
         Fj = -(f / r)[:, None] * d
-        self.add_forces(np.concatenate([i, j]), np.concatenate([-Fj, Fj]))
+        if getattr(self, "_brittle_ids", None) is None:  # one array for every step: its force plan is kept
+            self._brittle_ids = np.concatenate([i, j])
+        self.add_forces(self._brittle_ids, np.concatenate([-Fj, Fj]))
 
     def _cundall(self) -> None:
         f_d = -self._damping * np.abs(self.F) * np.sign(self.V)
@@ -336,11 +338,12 @@ class VerletArrays:
         F = np.ascontiguousarray(F, float).reshape(-1, 3)
         key = (ids, self.dt, self._held_mask(), self._n_partial)  # a new set, step or prescription: a new plan
         plans = self.__dict__.setdefault("_plans", {})
-        known = plans.get(id(ids))
+        known = plans.pop(id(ids), None)  # (re-inserted last: the least recently used go first)
         if known is None or any(a is not b for a, b in zip(key, known[0])):
-            if len(plans) > 8:  # (sets come and go with rebuilt models: keep the few in use)
-                plans.clear()
-            known = plans[id(ids)] = key, self._force_plan(np.asarray(ids, int))
+            if len(plans) >= 8:  # (sets come and go with rebuilt models: keep the few in use)
+                plans.pop(next(iter(plans)))
+            known = key, self._force_plan(np.asarray(ids, int))
+        plans[id(ids)] = known
         rows, takes, mass = known[1]
         add_held_forces(self._added, self.F, self.V, rows, F, takes, 0.5 * self.dt, mass)
 

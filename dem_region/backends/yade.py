@@ -322,22 +322,26 @@ class YadeBackend:
         self.O.save(tmp)
         os.replace(tmp, path)
         f, t = self.O.forces.f, self.O.forces.t
-        np.save(path + ".forces.npy", np.array([[*f(i), *t(i)] for i in range(len(self.O.bodies))], float))
+        forces = np.array([[*f(i), *t(i)] for i in range(len(self.O.bodies))], float)
+        # stamped with the iteration, so that a restore never pairs them with another state
+        # (a kill between the two writes, where a caller reuses a path)
+        np.save(path + ".forces.npy", np.vstack([forces, np.full((1, 6), float(self.O.iter))]))
 
     def restore(self, path) -> None:
         """Load a checkpoint and set the force container as it was saved (the next move's
-        forces): the continuation is bit-identical. A checkpoint without them (written before
-        they were kept) has its forces recomputed at its positions by a step of zero length,
-        without the hook's: a coupled beam resumed so moved first without its impactor and law
-        bonds, 4 % off in momentum."""
+        forces): the continuation is bit-identical. Without them (a checkpoint written before
+        they were kept, or forces of another iteration) the forces are recomputed at its
+        positions by a step of zero length, without the hook's: a coupled beam resumed so
+        moved first without its impactor and law bonds, 4 % off in momentum."""
         self.O.load(str(path))
         self._states = [b.state for b in self.O.bodies][: self.scene.n]
         self.law = self.O.engines[3].lawDispatcher.functors[0]
         saved = Path(str(path) + ".forces.npy")
-        if saved.exists():
+        rows = np.load(saved) if saved.exists() else None
+        if rows is not None and rows[-1, 0] == self.O.iter and len(rows) == len(self.O.bodies) + 1:
             forces, V3 = self.O.forces, self.yade.Vector3
             forces.reset()
-            for i, row in enumerate(np.load(saved).tolist()):
+            for i, row in enumerate(rows[:-1].tolist()):
                 forces.addF(i, V3(*row[:3]))
                 forces.addT(i, V3(*row[3:]))
             return
