@@ -742,7 +742,8 @@ def _beam_3d_file(folder: Path, apart: bool, tets: bool = False) -> str:
     return str(folder / "beam.toml")
 
 
-@pytest.mark.parametrize("mode, dem", [("fem", None), ("coupled", "liggghts")])
+# (coupled with -m slow, the suite's budget: the 2D runs-apart beam is coupled in the default suite)
+@pytest.mark.parametrize("mode, dem", [("fem", None), pytest.param("coupled", "liggghts", marks=pytest.mark.slow)])
 def test_3d_ply_runs_meshed_apart_answer_as_shared_nodes(femdem, tmp_path, mode, dem):
     """The 3D seed strip from a Gmsh file whose ply runs are meshed apart (other element lengths
     along and across, other rows through): its cohesive interfaces joined node to face, struck
