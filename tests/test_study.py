@@ -532,7 +532,6 @@ def _runs_meshed_apart(path) -> str:
     the zone (x < 6 mm) and 12 beyond, graded 1.15; the 90 run 0.545 mm and 9; 1, 2, 1 elements
     through the runs. Physical groups as the file's ("crossply", "rollers"). Written as Gmsh 4.1
     by meshio; returns the path."""
-    import meshio
     from fem_region import mesh as fem_mesh
     points, quads = [], []
     for y0, y1, through, across, beyond in ((0.0, 0.4e-3, 1, 15, 12), (0.4e-3, 1.2e-3, 2, 11, 9),
@@ -544,12 +543,19 @@ def _runs_meshed_apart(path) -> str:
         points.append(m.p.T)
     P, Q = np.vstack(points), np.vstack(quads)
     roller = int(np.argmin(np.hypot(P[:, 0] - 20e-3, P[:, 1])))
-    tags = np.tile([2, 1], (len(P), 1))
+    return _write_beam_file(path, np.column_stack([P, np.zeros(len(P))]), "quad", Q, roller)
+
+
+def _write_beam_file(path, points: np.ndarray, kind: str, cells: np.ndarray, roller: int) -> str:
+    """A Gmsh 4.1 file (by meshio) of the Gmsh beam's groups: the surface "crossply" of ``cells``
+    (meshio type ``kind``, one entity) and the point "rollers" at node ``roller``; the path."""
+    import meshio
+    tags = np.tile([2, 1], (len(points), 1))  # every node on the surface entity, the roller on its point's
     tags[roller] = [0, 21]
-    meshio.write(path, meshio.Mesh(np.column_stack([P, np.zeros(len(P))]), [("vertex", np.array([[roller]])), ("quad", Q)],
+    meshio.write(path, meshio.Mesh(points, [("vertex", np.array([[roller]])), (kind, cells)],
                                    point_data={"gmsh:dim_tags": tags},
-                                   cell_data={"gmsh:physical": [np.array([2]), np.ones(len(Q), int)],
-                                              "gmsh:geometrical": [np.array([21]), np.ones(len(Q), int)]},
+                                   cell_data={"gmsh:physical": [np.array([2]), np.ones(len(cells), int)],
+                                              "gmsh:geometrical": [np.array([21]), np.ones(len(cells), int)]},
                                    field_data={"crossply": np.array([1, 2]), "rollers": np.array([2, 0])}),
                  file_format="gmsh", binary=False)
     return str(path)
@@ -567,15 +573,7 @@ def _triangulated(path) -> str:
     quads = np.vstack([c.data for c in m.cells if c.type == "quad"])
     (roller,) = m.cells_dict["vertex"].ravel()
     tri = np.vstack([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
-    tags = np.tile([2, 1], (len(m.points), 1))  # one surface entity (1), the roller's point (21), as _runs_meshed_apart's
-    tags[roller] = [0, 21]
-    meshio.write(path, meshio.Mesh(m.points, [("vertex", np.array([[roller]])), ("triangle", tri)],
-                                   point_data={"gmsh:dim_tags": tags},
-                                   cell_data={"gmsh:physical": [np.array([2]), np.ones(len(tri), int)],
-                                              "gmsh:geometrical": [np.array([21]), np.ones(len(tri), int)]},
-                                   field_data={"crossply": np.array([1, 2]), "rollers": np.array([2, 0])}),
-                 file_format="gmsh", binary=False)
-    return str(path)
+    return _write_beam_file(path, m.points, "triangle", tri, int(roller))
 
 
 # the interfaces out of reach (strengths, toughness): the cohesive plies stay joined
