@@ -127,7 +127,7 @@ class ExplicitDynamics:
         # step is ruled by the count of numpy operations, not their size)
         self._du, self._f_int, self._f = zero.copy(), zero.copy(), zero.copy()
         self._f_ext = (zero.copy(), zero.copy())  # the loads of this step and the last, in turn
-        self._f_damp = zero.copy()
+        self._f_damp, self._Kv = zero.copy(), zero.copy()  # damping's force, and K v for its beta term
         self._a_rest = np.zeros(self._prescribed.size)  # the prescribed DOFs' acceleration when none moves
         self._moving = [sup for sup in self.supports if sup.velocity is not at_rest]
         rest = [sup.dofs for sup in self.supports if sup.velocity is at_rest]
@@ -385,8 +385,6 @@ class ExplicitDynamics:
         else:
             f[:] = 0.0
         if self.beta:  # beta K v
-            if getattr(self, "_Kv", None) is None:
-                self._Kv = np.zeros_like(f)
             axpy(f, self.beta, self.region.stiffness_times(v, self._Kv))
         self.region.add_hourglass_viscous_force(v, f)
         if self.bulk_viscosity is not None:

@@ -83,6 +83,7 @@ class VerletArrays:
         self._brittle = np.flatnonzero(np.isfinite(scene.bond_strength))
         b = scene.bonds[self._brittle]
         self._brittle_r0 = np.linalg.norm(scene.x[b[:, 1]] - scene.x[b[:, 0]], axis=1)
+        self._brittle_ids = np.concatenate([b[:, 0], b[:, 1]])  # their forces' rows, one array: its plan is kept
         self._brittle_alive = np.ones(len(self._brittle), bool)
         self._broken: list[tuple] = []  # (i, j, t s, x, y, z m)
         self._released = 0.0  # J, elastic energy of the bonds at the moment they broke
@@ -131,8 +132,6 @@ class VerletArrays:
             self._broken += [(int(a), int(b), self._time, *m) for a, b, m in zip(i[newly], j[newly], mid.tolist())]
         f = np.where(self._brittle_alive, f, np.minimum(f, 0.0))  # broken: contact in compression only
         Fj = -(f / r)[:, None] * d
-        if getattr(self, "_brittle_ids", None) is None:  # one array for every step: its force plan is kept
-            self._brittle_ids = np.concatenate([i, j])
         self.add_forces(self._brittle_ids, np.concatenate([-Fj, Fj]))
 
     def _cundall(self) -> None:
