@@ -740,8 +740,10 @@ def _beam_3d_file(folder: Path, apart: bool, tets: bool = False) -> str:
     return str(folder / "beam.toml")
 
 
-# (coupled with -m slow, the suite's budget: the 2D runs-apart beam is coupled in the default suite)
-@pytest.mark.parametrize("mode, dem", [("fem", None), pytest.param("coupled", "liggghts", marks=pytest.mark.slow)])
+# (with -m slow, the suite's budget: the 2D runs-apart beam runs both modes in the default suite, and
+# tests/test_node_to_face.py the 3D faces, Hex8 and Tet4)
+@pytest.mark.slow
+@pytest.mark.parametrize("mode, dem", [("fem", None), ("coupled", "liggghts")])
 def test_3d_ply_runs_meshed_apart_answer_as_shared_nodes(femdem, tmp_path, mode, dem):
     """The 3D seed strip from a Gmsh file whose ply runs are meshed apart (other element lengths
     along and across, other rows through): its cohesive interfaces joined node to face, struck
@@ -804,6 +806,7 @@ def test_a_cohesive_far_field_of_tetrahedra_dissipates_its_toughness(femdem, tmp
     _dissipation_within_the_toughness_bounds(s, "table1", 0.0)
 
 
+@pytest.mark.slow  # (the suite's budget: the T3 beam is coupled in the default suite)
 def test_a_coupled_strip_is_tied_into_tetrahedra(femdem, tmp_path):
     """The 3D seed strip coupled (LIGGGHTS) with its far field of Tet4 elements and cohesive
     plies: the zone's particles hosted in tetrahedra, the ledger closed, the FEM the file's
