@@ -154,7 +154,8 @@ def build(p: dict, mode: str, dem: str):
         sim = window_growth.growing(p, dem, x_a, lambda q, x_b, reserve, start: model(q, mode, dem, x_a, x_b,
                                                                                       reserve, start))
     else:
-        sim, _ = model(p, mode, dem, x_a, window_growth.window_end(p, x_b))
+        x_b = window_growth.window_end(p, x_b)
+        sim, _ = model(p, mode, dem, window_growth.window_start(p, x_a, x_b) if mode == "coupled" else x_a, x_b)
     sim.warnings += warnings
     return sim
 
@@ -181,16 +182,16 @@ def model(p: dict, mode: str, dem: str, x_a: float, x_b: float, reserve=None, st
     pin = np.flatnonzero((np.abs(X[:, 0] - X[:, 0].max()) < 1e-9) & (np.abs(X[:, 1] - h) < 1e-9 * h))[:1]
     up, down = 2 * spec.upper_end + 1, 2 * spec.lower_end + 1
     supports = [PrescribedMotion(up, speed), PrescribedMotion(down, lambda t: -speed(t)), PrescribedMotion(2 * pin)]
-    sim, fem, bonds = dl.simulate(p, mode, dem, spec, supports, dl.damping_alpha(p, omega), t_load, start)
+    sim, fem, plane = dl.simulate(p, mode, dem, spec, supports, dl.damping_alpha(p, omega), t_load, start)
     wf = spec.width_factor
     sim.probes.update({
         "load": lambda: wf * fem.reaction(up),
         "opening": lambda: float(fem.state.u[spec.upper_end, 1].mean() - fem.state.u[spec.lower_end, 1].mean()),
-        "crack_tip": lambda: dl.crack_tip(bonds),
-        "interface_dissipated": lambda: wf * bonds.dissipated_energy(),
-        "cohesive_zone_bonds": lambda: dl.softening_bonds(bonds),
+        "crack_tip": plane.tip,
+        "interface_dissipated": lambda: wf * plane.dissipated_energy(),
+        "cohesive_zone_bonds": plane.softening,
     })
-    sim.counts["law_bonds"] = len(bonds.pairs)
+    sim.counts["law_bonds"] = sum(len(b.pairs) for b in plane.families)
     return sim, spec
 
 

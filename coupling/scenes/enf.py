@@ -206,25 +206,28 @@ def validity(p: dict, mode: str = "coupled", fracture: str = "II", share: float 
 def bending_specimen(p: dict, mode: str, dem: str, cf: dict, single_leg: bool, warnings: list[str]):
     """Three-point bending of the split beam: ENF (both arms on the left support) or single
     leg bending (only the upper arm on it, so the lower arm's cracked part carries no load).
-    The DEM window from x = 0 to dem.window_end (0: window_end_placed), or growing
+    The DEM window from dem.window_start (0: x = 0) to dem.window_end (0: window_end_placed), or growing
     (zone.grow, window_growth.py)."""
     if mode == "coupled" and p["zone.grow"]:
         sim = window_growth.growing(p, dem, 0.0, lambda q, x_b, reserve, start: bending_model(
             q, mode, dem, cf, single_leg, x_b, reserve, start), load_lines=(p["geometry.half_span"],))
     else:  # (no window in --mode fem)
-        x_b = window_growth.window_end(p, window_end_placed(p, cf, dl.bond_spacing(p, mode))) if mode == "coupled" \
-            else 0.0
-        sim = bending_model(p, mode, dem, cf, single_leg, x_b)[0]
+        x_a = x_b = 0.0
+        if mode == "coupled":
+            x_b = window_growth.window_end(p, window_end_placed(p, cf, dl.bond_spacing(p, mode)))
+            x_a = window_growth.window_start(p, 0.0, x_b)
+        sim = bending_model(p, mode, dem, cf, single_leg, x_b, x_a=x_a)[0]
     sim.warnings += warnings
     return sim
 
 
-def bending_model(p: dict, mode: str, dem: str, cf: dict, single_leg: bool, x_b: float, reserve=None, start=None):
-    """(Simulation, Specimen) of bending_specimen with the DEM window [0, x_b] m (coupled);
+def bending_model(p: dict, mode: str, dem: str, cf: dict, single_leg: bool, x_b: float, reserve=None, start=None,
+                  x_a: float = 0.0):
+    """(Simulation, Specimen) of bending_specimen with the DEM window [x_a, x_b] m (coupled);
     reserve, start: a growing window's (window_growth.py)."""
     L, a0, h = p["geometry.half_span"], p["geometry.crack_length"], p["geometry.arm_thickness"]
     omega = beam_omega(p)
-    spec = dl.specimen(p, mode, a0, 0.0, x_b, omega, stations=(L, 2 * L), reserve=reserve)
+    spec = dl.specimen(p, mode, a0, x_a, x_b, omega, stations=(L, 2 * L), reserve=reserve)
     t_load = p["load.duration_periods"] * 2 * np.pi / omega
     t_ramp = p["load.ramp_time"] or 2 * 2 * np.pi / omega
     v0 = p["load.final_deflection_factor"] * cf["delta_peak"] / (t_load - 0.5 * t_ramp)
@@ -246,16 +249,16 @@ def bending_model(p: dict, mode: str, dem: str, cf: dict, single_leg: bool, x_b:
     right = np.flatnonzero(bottom & (np.abs(X[:, 0] - 2 * L) < tol))
     supports = [PrescribedMotion(2 * punch + 1, speed), PrescribedMotion(2 * punch[:1]),
                 PrescribedMotion(np.concatenate([2 * left + 1, 2 * right + 1]))]
-    sim, fem, bonds = dl.simulate(p, mode, dem, spec, supports, dl.damping_alpha(p, omega), t_load, start)
+    sim, fem, plane = dl.simulate(p, mode, dem, spec, supports, dl.damping_alpha(p, omega), t_load, start)
     wf = spec.width_factor
     sim.probes.update({
         "load": lambda: -wf * fem.reaction(2 * punch + 1),
         "deflection": lambda: -float(fem.state.u[under, 1].mean()),
-        "crack_tip": lambda: dl.crack_tip(bonds),
-        "interface_dissipated": lambda: wf * bonds.dissipated_energy(),
-        "cohesive_zone_bonds": lambda: dl.softening_bonds(bonds),
+        "crack_tip": plane.tip,
+        "interface_dissipated": lambda: wf * plane.dissipated_energy(),
+        "cohesive_zone_bonds": plane.softening,
     })
-    sim.counts["law_bonds"] = len(bonds.pairs)
+    sim.counts["law_bonds"] = sum(len(b.pairs) for b in plane.families)
     return sim, spec
 
 

@@ -41,6 +41,10 @@ PARAMETERS: dict[str, Param] = {
     "dem.window_end": Param(0.0, "x of the DEM window's end; 0: the closed form's crack path and beyond it the "
                             "larger of dem.margin and the cohesive zone (dcb; enf and mixed_mode: at least the load "
                             "line plus dem.margin); with zone.grow, where it starts (0: a0 plus zone.margin)", unit="m", low=0.0),
+    "dem.window_start": Param(0.0, "x of the DEM window's start; 0: the case's (dcb: dem.margin behind a0; enf and "
+                              "mixed_mode: the specimen's end); beyond a0: the FEM band from a0 to it is a cohesive "
+                              "interface (node pairs at the particle spacing, the same law), so the crack starts in "
+                              "the FEM and runs on into the particles", unit="m", low=0.0),
 }
 
 
@@ -85,6 +89,24 @@ def window_end(p: dict, placed: float) -> float:
                         f"before the specimen's root; allowed {a0:.4g} < x <= geometry.length - 4 h = {limit:.4g} m, "
                         "or 0 (the closed form's)")
     return x_b or placed
+
+
+def window_start(p: dict, placed: float, x_b: float) -> float:
+    """m, the DEM window's start: dem.window_start, refused (CaseError) unless beyond the
+    initial crack tip a0 and at least 4 particle spacings before the window's end x_b (m), and
+    with a growing window (its growth criterion reads the band ahead of the window, not
+    behind it), or ``placed`` (the case's) when 0."""
+    x_a, a0, d = p["dem.window_start"], p["geometry.crack_length"], p["zone.particle_size"]
+    if not x_a:
+        return placed
+    if p["zone.grow"]:
+        raise CaseError(f"dem.window_start = {x_a:g}: a growing window (zone.grow = true) starts where the case "
+                        "places it; allowed: 0 with zone.grow")
+    if not a0 < x_a <= x_b - 4 * d * (1 - 1e-9):
+        raise CaseError(f"dem.window_start = {x_a:g}: the DEM window must start beyond the initial crack tip and "
+                        f"hold at least 4 particle spacings before its end; allowed {a0:.4g} < x <= "
+                        f"{x_b - 4 * d:.4g} m (the window's end {x_b:.4g} m less 4 zone.particle_size), or 0")
+    return x_a
 
 
 def start_end(p: dict, x_a: float, load_lines: tuple[float, ...] = ()) -> float:
