@@ -93,15 +93,11 @@ def window_end(p: dict, placed: float) -> float:
 
 def window_start(p: dict, placed: float, x_b: float) -> float:
     """m, the DEM window's start: dem.window_start, refused (CaseError) unless beyond the
-    initial crack tip a0 and at least 4 particle spacings before the window's end x_b (m), and
-    with a growing window (its growth criterion reads the band ahead of the window, not
-    behind it), or ``placed`` (the case's) when 0."""
+    initial crack tip a0 and at least 4 particle spacings before the window's end x_b (m), or
+    ``placed`` (the case's) when 0. (A growing window refuses it: growing.)"""
     x_a, a0, d = p["dem.window_start"], p["geometry.crack_length"], p["zone.particle_size"]
     if not x_a:
         return placed
-    if p["zone.grow"]:
-        raise CaseError(f"dem.window_start = {x_a:g}: a growing window (zone.grow = true) starts where the case "
-                        "places it; allowed: 0 with zone.grow")
     if not a0 < x_a <= x_b - 4 * d * (1 - 1e-9):
         raise CaseError(f"dem.window_start = {x_a:g}: the DEM window must start beyond the initial crack tip and "
                         f"hold at least 4 particle spacings before its end; allowed {a0:.4g} < x <= "
@@ -125,6 +121,9 @@ def growing(p: dict, dem: str, x_a: float, model, load_lines: tuple[float, ...] 
     coupled (Simulation, Specimen) of the window [x_a, x_b] on the mesh ``reserve`` (see
     delamination.build_specimen), continued from ``start`` (None: from rest); load_lines: see
     start_end."""
+    if p["dem.window_start"]:  # (its growth criterion reads the band ahead of the window, not behind it)
+        raise CaseError(f"dem.window_start = {p['dem.window_start']:g}: a growing window (zone.grow = true) starts "
+                        "where the case places it; allowed: 0 with zone.grow")
     if p["coupling.tie"] != "kinematic":
         raise CaseError(f"coupling.tie = {p['coupling.tie']}: zone.grow needs the kinematic tie (a penalty tie's "
                         "springs would not carry over); allowed: kinematic")
