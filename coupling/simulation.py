@@ -227,6 +227,7 @@ def run_clock(sim: Simulation, on_sample: Callable[[int, float], None] | None = 
         timing["io"] += clock() - t0
 
     can_save = run_dir is not None and checkpoint_every > 0 and sim.checkpoint is not None
+    grow_every = sim.growth.every if sim.growth is not None else 0  # checks between samples (zone.grow_every)
     step = first - 1
     try:
         if resume_from is None:
@@ -237,19 +238,23 @@ def run_clock(sim: Simulation, on_sample: Callable[[int, float], None] | None = 
             # the steps up to the next thing the loop does in one go (a sample, a frame, a checkpoint)
             nxt = min(sim.n_steps, _next_multiple(step, sim.history_every),
                       _next_multiple(step, frame_every) if frame_every and on_frame else sim.n_steps,
-                      _next_multiple(step, checkpoint_every) if can_save else sim.n_steps)
+                      _next_multiple(step, checkpoint_every) if can_save else sim.n_steps,
+                      _next_multiple(step, grow_every) if grow_every else sim.n_steps)
             run_stages(sim.stages, nxt - step)
             step = nxt
-            if step % sim.history_every == 0 or step == sim.n_steps:
+            sampled = step % sim.history_every == 0 or step == sim.n_steps
+            if sampled:
                 sample(step)
-                if sim.growth is not None and step < sim.n_steps:
-                    t0 = clock()
-                    grown = sim.growth(step)
-                    if grown is not None:  # the run goes on with the grown zone's model
-                        timing.update(_corrected(timing, sim))
-                        retired += stage_timing(sim.stages)
-                        sim = grown
-                    timing["orchestrator"] += clock() - t0
+            if sim.growth is not None and step < sim.n_steps and (sampled or (grow_every and step % grow_every == 0)):
+                if not sampled:
+                    sync()  # (the growth reads the participants' snapshots)
+                t0 = clock()
+                grown = sim.growth(step)
+                if grown is not None:  # the run goes on with the grown zone's model
+                    timing.update(_corrected(timing, sim))
+                    retired += stage_timing(sim.stages)
+                    sim = grown
+                timing["orchestrator"] += clock() - t0
             if frame_every and on_frame and step % frame_every == 0:
                 frame(step)
             if can_save and step % checkpoint_every == 0 and step < sim.n_steps:

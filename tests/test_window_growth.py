@@ -126,11 +126,14 @@ def test_law_springs_give_the_engine_springs_results():
         assert abs(qb[key] / qa[key] - 1) < 2e-3, key
 
 
-def test_a_window_resumed_after_a_conversion_finishes_as_the_uninterrupted_one(tmp_path):
+# checks between samples with -m slow (8 s; the suite's budget)
+@pytest.mark.parametrize("every", [0, pytest.param(300, marks=pytest.mark.slow)])
+def test_a_window_resumed_after_a_conversion_finishes_as_the_uninterrupted_one(tmp_path, every):
     """dcb_coarse, checkpoint at 60 % of the run (after the first conversion): the resumed run
-    rebuilds the grown window and its history equals the uninterrupted run's, bit for bit."""
+    rebuilds the grown window and its history equals the uninterrupted run's, bit for bit; also
+    with the growth checked every 300 steps between the samples (zone.grow_every)."""
     from coupling import checkpoint
-    sets = {"zone.grow": True, "clock.t_end": 1.5e-3}
+    sets = {"zone.grow": True, "clock.t_end": 1.5e-3, "zone.grow_every": every}
 
     def run(**kw):
         _, sim = _model("dcb_coarse", sets)
@@ -150,6 +153,33 @@ def test_a_window_resumed_after_a_conversion_finishes_as_the_uninterrupted_one(t
     resumed, _ = run(resume_from=ck)
     for k, v in straight["history"].items():
         assert np.array_equal(v, resumed["history"][k], equal_nan=True), k
+
+
+def _grown(sets: dict) -> tuple[dict, object]:
+    """(history, Growth) of dcb_coarse grown in process with ``sets``."""
+    _, sim = _model("dcb_coarse", {"zone.grow": True, **sets})
+    result = None
+    try:
+        result = run_clock(sim)
+        return result["history"], result["simulation"].growth
+    finally:
+        (result["simulation"] if result else sim).close()
+
+
+def test_growth_checked_between_samples_keeps_a_short_lead():
+    """zone.grow_every checks the growth between history samples. dcb_coarse with a 2 mm lead
+    and samples every 2,000 steps (11 a run): checked at the samples only, the crack reaches the
+    window's edge between two checks (damage there); checked every 200 steps, the edge stays
+    undamaged at every sample, and the conversions come at checks, some between samples."""
+    sets = {"zone.margin": 0.002, "output.history_every": 2000}
+    h, _ = _grown(sets)
+    assert max(h["damage_at_zone_edge"]) > 0  # the lead is too short for the samples alone
+    h, growth = _grown({**sets, "zone.grow_every": 200})
+    assert max(h["damage_at_zone_edge"]) == 0.0
+    steps = np.array([t for t, *_ in growth.events]) / growth.sim.dt
+    assert np.allclose(steps, 200 * np.round(steps / 200), rtol=0, atol=1e-6)
+    assert np.any(np.round(steps) % 2000 != 0)
+    assert np.all(np.abs(growth.history()["zone.conversion_momentum_jump"]) < 1e-12)
 
 
 @pytest.mark.parametrize("sets, key", [

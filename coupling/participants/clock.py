@@ -72,6 +72,8 @@ class CoupledClock:
         self.momentum_snapshot = np.zeros(3)
         self.snapshot_every = 1  # FEM steps between snapshots (the history interval) ...
         self.last_window = -1  # ... and at this FEM step
+        self.check_every = 0  # ... and every so many (a growing zone's checks between samples, 0: none),
+        self.first_step = 0  # counted in the run's steps, of which this clock's first is this one
         self._m_dem = dem.scene.mass * tie.free_particles(dem.scene.n)
         # the elements touching the interface nodes are fast forces too: then no slow impulse
         # lands on a node the DEM moves, and the scheme does not resonate (see module doc)
@@ -123,7 +125,9 @@ class CoupledClock:
         if self._slow:
             fem.compute_forces()
             n = self.k // self.m
-            if n % self.snapshot_every == 0 or n == self.last_window:  # at t_n, before the kicks
+            r = n + self.first_step  # in the run's count
+            check = self.check_every and r % self.check_every == 0
+            if r % self.snapshot_every == 0 or n == self.last_window or check:  # at t_n, before the kicks
                 self._kicks(self._band_f, True, False)
                 self._snapshot(self._f_fast, self._a_slow)
 

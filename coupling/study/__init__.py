@@ -181,7 +181,7 @@ class Study:
             raise CaseError(f"[impactors.NAME] or [loads.NAME]: a {shape} takes exactly one, on its top face's "
                             f"centre; given {len(names['impactors']) + len(names['loads'])}")
         if shape not in growing:  # a zone grown during the run: the beams', bonded beams' and plates' so far
-            for key in ("grow", "grow_to", "conversion"):
+            for key in ("grow", "grow_to", "conversion", "grow_every"):
                 if given("zone", key):
                     raise CaseError(f"zone.{key}: a zone grown during the run is built for the beams and bonded beams "
                                     f"(geometry.shape = {', '.join(repr(s) for s in growing)}) so far; allowed for "
@@ -348,7 +348,7 @@ FORM_WORDS = {"rod": "a flat-faced rod (impactors.*.shape = 'rod')", "impactor":
 SPECIMEN = ("materials.", "interfaces.", "laminates.", "geometry.", "impactors.", "loads.", "delaminations.",
             "sheets.", "supports.")
 PLACEMENT_KEYS = ("zone.placement", "zone.grow_at", "zone.margin", "zone.half_width", "zone.grow", "zone.grow_to",
-                  "zone.conversion")
+                  "zone.grow_every", "zone.conversion")
 
 
 def _physics_key(p: dict) -> tuple:

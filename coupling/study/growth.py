@@ -116,6 +116,7 @@ class Growth:
         self.study, self.p, self.dem = study, p, dem
         self.d, self.limit, self.margin = self._extent(built)
         self.grow_at = p["zone.grow_at"]
+        self.every = p.get("zone.grow_every", 0)  # clock steps between checks (0: each history sample)
         self.half_width = float(built.lattice.x[:, 0].max())
         self.events: list[tuple[float, float, float, float]] = []  # (t s, half width m, dE / E, |dP| / |P|)
         self.offset = {"external_work": 0.0, "dissipated": 0.0}  # J, the ledger's accounts carried over
@@ -155,6 +156,8 @@ class Growth:
         sim.growth = self
         # its clock counts FEM steps from its own start: the run's last one, in its count
         built.clock.last_window = sim.n_steps - self.step0
+        # the participants' snapshots at the checks between samples too, counted in the run's steps
+        built.clock.check_every, built.clock.first_step = self.every, self.step0
         sim.probes["zone_half_width"] = lambda: self.half_width
         energies = sim.energies
         sim.energies = lambda: {k: v + self.offset.get(k, 0.0) for k, v in energies().items()}
