@@ -134,7 +134,7 @@ def _load_study(path: Path, data: dict, overrides: dict[str, Any] | None) -> Cas
 def refuse_ineffective(case: Case, mode: str, dem: str | None) -> None:
     """CaseError for a setting that would change nothing in this configuration (a user who
     sets it expects an effect): DEM and coupling keys of --set in a run without them, a
-    penalty stiffness with the kinematic tie."""
+    growing zone's settings without zone.grow, a penalty stiffness with the kinematic tie."""
     p = case.parameters
     if mode == "fem" and dem is not None:
         raise CaseError(f"--dem {dem}: --mode fem runs no DEM engine; allowed: leave --dem out")
@@ -146,6 +146,12 @@ def refuse_ineffective(case: Case, mode: str, dem: str | None) -> None:
         if mode == "fem" and key.startswith(no_dem) or mode == "dem" and key.startswith(no_tie):
             raise CaseError(f"{key}: has no effect in --mode {mode} (no {'DEM zone' if mode == 'fem' else 'FEM-DEM tie or zone edge'}); "
                             "allowed: leave it out, or another --mode")
+    if mode == "coupled" and "zone.grow" in p and not p["zone.grow"]:  # a growth setting without growth
+        # (other modes take the coupled runs' settings silently: a bench's reference run)
+        for key in sorted(k for k in ("zone.grow_to", "zone.grow_every", "zone.conversion")
+                          if k in case.given and p[k] != schema[k].default):
+            raise CaseError(f"{key} = {p[key]!r}: has no effect without zone.grow = true; allowed: leave it out, "
+                            "or set zone.grow = true")
     if "run.steps" in schema and "clock.t_end" in case.given and p["clock.t_end"]:
         raise CaseError(f"clock.t_end = {p['clock.t_end']:g}: has no effect, case {case.name} runs run.steps clock "
                         "steps; allowed: 0, or set run.steps")
