@@ -151,8 +151,8 @@ def window(p: dict, cf: dict, a_end: float, d: float) -> tuple[float, float]:
 def build(p: dict, mode: str, dem: str):
     (x_a, x_b), warnings = domain(p, mode)
     if mode == "coupled" and p["zone.grow"]:
-        sim = window_growth.growing(p, dem, x_a, lambda q, x_b, reserve, start: model(q, mode, dem, x_a, x_b,
-                                                                                      reserve, start))
+        sim = window_growth.growing(p, dem, x_a, lambda q, x_a, x_b, reserve, start: model(q, mode, dem, x_a, x_b,
+                                                                                           reserve, start))
     else:
         x_b = window_growth.window_end(p, x_b)
         sim, _ = model(p, mode, dem, window_growth.window_start(p, x_a, x_b) if mode == "coupled" else x_a, x_b)

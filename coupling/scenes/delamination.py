@@ -184,7 +184,8 @@ def build_specimen(p: dict, a0: float, x_a: float, x_b: float, omega_arm: float,
     # from all-FEM's, 2.4 % without.
     ahead = x_a > a0 + tol
     x_e = x_a + 0.5 * d if ahead else x_a  # where the band's elements end
-    fine = (max(0.0, a0 - 2 * h), min(x_b, x_e + 2 * h)) if ahead else (0.0, 0.0)
+    # (a growing window's reserve: the same mesh whatever its end)
+    fine = (max(0.0, a0 - 2 * h), min(reserve[0] if reserve else x_b, x_e + 2 * h)) if ahead else (0.0, 0.0)
     # x lines: graded into the window's ends, the window itself at the particle spacing's multiple
     def line(a, b):
         e = d if fine[0] - tol < a and b < fine[1] + tol else ex
@@ -196,7 +197,7 @@ def build_specimen(p: dict, a0: float, x_a: float, x_b: float, omega_arm: float,
     else:
         x0, x1, e = reserve
         grid = x0 + e * np.arange(int(round((x1 - x0) / e)) + 1)
-        breaks = np.unique(np.concatenate([[0.0, x_a, x0, x1, L], inner]))
+        breaks = np.unique(np.concatenate([[0.0, x_e, x0, x1, L], inner]))
         xs = np.unique(np.concatenate([grid, inner] + [line(a, b) for a, b in zip(breaks[:-1], breaks[1:])
                                                        if not (x0 - 1e-9 * L < a and b < x1 + 1e-9 * L)]))
     nt = p["mesh.elements_through"]

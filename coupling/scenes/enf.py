@@ -209,8 +209,8 @@ def bending_specimen(p: dict, mode: str, dem: str, cf: dict, single_leg: bool, w
     The DEM window from dem.window_start (0: x = 0) to dem.window_end (0: window_end_placed), or growing
     (zone.grow, window_growth.py)."""
     if mode == "coupled" and p["zone.grow"]:
-        sim = window_growth.growing(p, dem, 0.0, lambda q, x_b, reserve, start: bending_model(
-            q, mode, dem, cf, single_leg, x_b, reserve, start), load_lines=(p["geometry.half_span"],))
+        sim = window_growth.growing(p, dem, 0.0, lambda q, x_a, x_b, reserve, start: bending_model(
+            q, mode, dem, cf, single_leg, x_b, reserve, start, x_a=x_a), load_lines=(p["geometry.half_span"],))
     else:  # (no window in --mode fem)
         x_a = x_b = 0.0
         if mode == "coupled":

@@ -97,7 +97,7 @@ def window_end(p: dict, placed: float) -> float:
 def window_start(p: dict, placed: float, x_b: float) -> float:
     """m, the DEM window's start: dem.window_start, refused (CaseError) unless beyond the
     initial crack tip a0 and at least 4 particle spacings before the window's end x_b (m), or
-    ``placed`` (the case's) when 0. (A growing window refuses it: growing.)"""
+    ``placed`` (the case's) when 0."""
     x_a, a0, d = p["dem.window_start"], p["geometry.crack_length"], p["zone.particle_size"]
     if not x_a:
         return placed
@@ -110,29 +110,30 @@ def window_start(p: dict, placed: float, x_b: float) -> float:
 
 def start_end(p: dict, x_a: float, load_lines: tuple[float, ...] = ()) -> float:
     """m, the growing window's first end: dem.window_end, or the lead beyond the initial crack
-    tip a0 and beyond the load lines ahead of it (x m: a bending specimen's punch, on the
-    crack's path), in whole spacings from x_a. A load line just past the window's end moves
-    the peak load: enf_coarse at E11 = 40 GPa, h = 4 mm, the window ending 3 mm short of the
-    load line read 2.0 % above the one 4 mm past it, 24 mm past it 0.16 % below."""
+    tip a0 (or the window's start x_a m, when that is ahead of it) and beyond the load lines
+    ahead of it (x m: a bending specimen's punch, on the crack's path), in whole spacings from
+    x_a. A load line just past the window's end moves the peak load: enf_coarse at E11 = 40
+    GPa, h = 4 mm, the window ending 3 mm short of the load line read 2.0 % above the one 4 mm
+    past it, 24 mm past it 0.16 % below."""
     d, a0 = p["zone.particle_size"], p["geometry.crack_length"]
-    x_b = window_end(p, max([a0] + [x for x in load_lines if x > a0]) + lead(p))
+    x_b = window_end(p, max([a0, x_a] + [x for x in load_lines if x > a0]) + lead(p))
     return x_a + np.ceil((x_b - x_a) / d - 1e-9) * d
 
 
-def growing(p: dict, dem: str, x_a: float, model, load_lines: tuple[float, ...] = ()) -> "object":
-    """The Simulation of a specimen whose window grows: model(p, x_b, reserve, start) -> the
-    coupled (Simulation, Specimen) of the window [x_a, x_b] on the mesh ``reserve`` (see
-    delamination.build_specimen), continued from ``start`` (None: from rest); load_lines: see
-    start_end."""
-    if p["dem.window_start"]:  # (its growth criterion reads the band ahead of the window, not behind it)
-        raise CaseError(f"dem.window_start = {p['dem.window_start']:g}: a growing window (zone.grow = true) starts "
-                        "where the case places it; allowed: 0 with zone.grow")
+def growing(p: dict, dem: str, placed: float, model, load_lines: tuple[float, ...] = ()) -> "object":
+    """The Simulation of a specimen whose window grows: model(p, x_a, x_b, reserve, start) ->
+    the coupled (Simulation, Specimen) of the window [x_a, x_b] on the mesh ``reserve`` (see
+    delamination.build_specimen), continued from ``start`` (None: from rest); x_a: where the
+    window starts (window_start: dem.window_start, or the case's ``placed``), its end grows;
+    load_lines: see start_end."""
     if p["coupling.tie"] != "kinematic":
         raise CaseError(f"coupling.tie = {p['coupling.tie']}: zone.grow needs the kinematic tie (a penalty tie's "
                         "springs would not carry over); allowed: kinematic")
     d, h, L = p["zone.particle_size"], p["geometry.arm_thickness"], p["geometry.length"]
     e = max(1, round((p["mesh.element_length"] or 2 * d) / d)) * d
+    x_a = p["dem.window_start"] or placed
     x0 = start_end(p, x_a, load_lines)
+    window_start(p, placed, x0)  # (refused before a0, or too close to the first end)
     limit = x0 + np.floor((L - 4 * h - x0) / e + 1e-9) * e
     if limit < x0:
         key = "dem.window_end" if p["dem.window_end"] else "zone.margin"
@@ -141,7 +142,7 @@ def growing(p: dict, dem: str, x_a: float, model, load_lines: tuple[float, ...] 
     reserve = (x0, float(limit), e)
 
     def make(x_b: float, q: dict, start=None):
-        sim, spec = model(q, x_b, reserve, start)
+        sim, spec = model(q, x_a, x_b, reserve, start)
         return sim, window_of(spec)
 
     sim, built = make(x0, p)
