@@ -126,7 +126,8 @@ class Specimen:
     """What a split-beam scene needs: the FEM factory, the DEM scene, the law bonds and the
     node sets (flat x / y DOF indices) for supports and loads. All-FEM (cohesive_specimen): no
     scene; the bonds join the node ``pairs`` (k, 2) lower / upper on the crack plane, each
-    standing for ``pair_area`` (k,) m^2, once the FEM exists (``simulate``)."""
+    standing for ``pair_area`` (k,) m^2, once the FEM exists (``simulate``). Coupled with the
+    window ahead of a0: the FEM band's node pairs as well, besides the window's."""
 
     scene: DemScene | None
     bonds: LawBonds | None
@@ -351,8 +352,9 @@ def _node_to_face_specimen(p: dict, a0: float, omega_arm: float, xs_lower: np.nd
 
 
 def simulate(p: dict, mode: str, dem: str, spec: Specimen, supports, alpha: float, t_end: float, start=None):
-    """(Simulation, FEM participant, the crack plane's LawBonds) of a specimen: coupled (the DEM
-    window's bonds on the particles) or fem (the node pairs' bonds: penalty 50 E22 / h, Turon
+    """(Simulation, FEM participant, CrackPlane: the crack plane's law bonds) of a specimen:
+    coupled (the DEM window's bonds on the particles, and the FEM band's node pairs ahead of a0
+    when the window starts there) or fem (the node pairs' bonds: penalty 50 E22 / h, Turon
     et al. 2007's alpha = 50 against the arm, or the elements' limit if lower
     (participants.fem.cohesive_penalty; the step is that of both together); strengths by
     resolved_strengths on the node spacing). start: a grown window's (coupled_simulation's)."""

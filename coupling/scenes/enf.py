@@ -258,7 +258,7 @@ def bending_model(p: dict, mode: str, dem: str, cf: dict, single_leg: bool, x_b:
         "interface_dissipated": lambda: wf * plane.dissipated_energy(),
         "cohesive_zone_bonds": plane.softening,
     })
-    sim.counts["law_bonds"] = sum(len(b.pairs) for b in plane.families)
+    sim.counts["law_bonds"] = len(plane.families[-1].pairs)  # (the window's, or all-FEM's: interface_bonds)
     return sim, spec
 
 

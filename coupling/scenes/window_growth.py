@@ -3,7 +3,7 @@ on dcb, enf and mixed_mode; coupling/study/growth.py grows the studies' zones th
 
 The window [x_a, x_b] starts at the initial crack tip a0, or a bending specimen's load line
 ahead of it, plus the lead (zone.margin, or 4 arm thicknesses: ``lead``), or at dem.window_end.
-At each history sample (or every zone.grow_every clock steps) Hashin's interlaminar index on
+At each history sample (and also every zone.grow_every clock steps) Hashin's interlaminar index on
 the crack plane, (<s_n> / Z0)^2 + (t_s / R0)^2 with the strengths the particles' law
 uses, is evaluated on both sides of the window's end: on the centroid stress of the intact FEM
 band's elements ahead of it, and on the window's crack-plane bonds (their last tractions, or
@@ -37,8 +37,9 @@ PARAMETERS: dict[str, Param] = {
     "zone.grow_at": Param(0.25, "zone.grow: Hashin's interlaminar index (1 at initiation) on the crack plane, "
                           "in the FEM band ahead of the window or on its particles, that the window keeps zone.margin "
                           "ahead of", low=0.05, high=2.0),
-    "zone.grow_every": Param(0, "zone.grow: clock steps between the growth checks; 0: at each history sample "
-                             "(about 1000 a run, output.history_every)", kind="int", low=0),
+    "zone.grow_every": Param(0, "zone.grow: the growth is checked at each history sample (about 1000 a run, "
+                             "output.history_every) and also every this many clock steps; 0: at the samples only",
+                             kind="int", low=0),
     "zone.margin": Param(0.0, "zone.grow: how far the window reaches beyond where the index reaches zone.grow_at; "
                          "0: 4 arm thicknesses", unit="m", low=0.0),
     "dem.window_end": Param(0.0, "x of the DEM window's end; 0: the closed form's crack path and beyond it the "
@@ -101,6 +102,9 @@ def window_start(p: dict, placed: float, x_b: float) -> float:
     x_a, a0, d = p["dem.window_start"], p["geometry.crack_length"], p["zone.particle_size"]
     if not x_a:
         return placed
+    if x_b - 4 * d <= a0:
+        raise CaseError(f"dem.window_start = {x_a:g}: no start fits: the window ends at {x_b:.4g} m, within 4 "
+                        f"particle spacings of the initial crack tip {a0:.4g} m; allowed: 0, or a later dem.window_end")
     if not a0 < x_a <= x_b - 4 * d * (1 - 1e-9):
         raise CaseError(f"dem.window_start = {x_a:g}: the DEM window must start beyond the initial crack tip and "
                         f"hold at least 4 particle spacings before its end; allowed {a0:.4g} < x <= "
