@@ -348,12 +348,18 @@ class FemRegion:
                      for q, Dq in zip(self.rules, self._D_rules))
         return float(energy), det_min
 
-    def centroid_strain_stress(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Small-strain (nel, ns) strain and stress (Pa) at element centroids (Voigt)."""
+    def centroid_B(self) -> tuple[np.ndarray, np.ndarray]:
+        """(small-strain B at each element's centroid (nel, ns, nd) 1/m, its DOFs (nel, nd)):
+        the centroid strain is B[e] @ u.ravel()[dofs[e]]."""
         if not hasattr(self, "_B1"):
             q = _quadrature(self.mesh, self.etype, self.etype.one_point_rule(), 1.0, [])
             self._B1 = strain_displacement(q.dN)[:, 0]
-        eps = np.einsum("esa,ea->es", self._B1, u.ravel()[self._edofs])
+        return self._B1, self._edofs
+
+    def centroid_strain_stress(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Small-strain (nel, ns) strain and stress (Pa) at element centroids (Voigt)."""
+        B, dofs = self.centroid_B()
+        eps = np.einsum("esa,ea->es", B, u.ravel()[dofs])
         return eps, np.einsum("est,et->es", self.D, eps)
 
     def nodes_where(self, predicate) -> np.ndarray:

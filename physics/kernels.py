@@ -375,3 +375,31 @@ def pairwise_sum(a, lo, n):
     half = n // 2
     half -= half % 8
     return pairwise_sum(a, lo, half) + pairwise_sum(a, lo + half, n - half)
+
+
+@kernel
+def element_failure_index(u, edofs, L, c, hoffman_on, Z0, R0, hashin_on, out):
+    """out (nel,) <- the larger of each element's Hoffman index (where hoffman_on) and Hashin's
+    interlaminar index (where hashin_on), and 0, of its ply stress s = L[e] @ u[edofs[e]] (Pa;
+    L (nel, 6, nd) Pa / m, rows 11 22 33 23 13 12 in ply axes; u (ndof,) m flat);
+    c = hoffman_coefficients(strengths). The growth check's criterion, at up to every FEM step."""
+    q23, q31, q12, l1, l2, l3, S23, S13, S12 = c
+    for e in range(L.shape[0]):
+        s1 = s2 = s3 = t23 = t13 = t12 = 0.0
+        for j in range(L.shape[2]):
+            x = u[edofs[e, j]]
+            s1 += L[e, 0, j] * x
+            s2 += L[e, 1, j] * x
+            s3 += L[e, 2, j] * x
+            t23 += L[e, 3, j] * x
+            t13 += L[e, 4, j] * x
+            t12 += L[e, 5, j] * x
+        best = 0.0
+        if hoffman_on[e]:
+            h = (q23 * (s2 - s3) ** 2 + q31 * (s3 - s1) ** 2 + q12 * (s1 - s2) ** 2
+                 + l1 * s1 + l2 * s2 + l3 * s3 + (t23 / S23) ** 2 + (t13 / S13) ** 2 + (t12 / S12) ** 2)
+            best = max(best, h)
+        if hashin_on[e]:
+            n = max(s3, 0.0)
+            best = max(best, (n / Z0) ** 2 + (t13 ** 2 + t23 ** 2) / R0 ** 2)
+        out[e] = best

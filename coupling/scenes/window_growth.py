@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..params import CaseError, Param
+from ..study.fields import ElementIndex
 from ..study.growth import Growth
 from . import delamination as dl
 
@@ -174,16 +175,25 @@ class WindowGrowth(Growth):
         c = region.X[region.mesh.t].mean(axis=0)  # (nel, 2) centroids
         x_b = float(built.lattice.x[:, 0].max())
         self._band = (np.abs(c[:, 1] - h) < built.t) & (c[:, 0] > x_b)  # the intact band ahead of the window
-        self._strengths = dl.resolved_strengths(self.p, built.t)
+        self._strengths = Z0, R0 = dl.resolved_strengths(self.p, built.t)
+        self._index = ElementIndex(region, self._plane_stress(region), False, self._band, None, Z0, R0)
+
+    @staticmethod
+    def _plane_stress(region):
+        """strain (nel, 3) -> (nel, 6) Pa: the crack plane's normal stress s_yy as "33" and its
+        shear s_xy as "13" (the plane's axes), the rest 0."""
+        def stress(strain: np.ndarray) -> np.ndarray:
+            s = np.einsum("est,et->es", region.D, strain)
+            out = np.zeros((len(s), 6))
+            out[:, 2], out[:, 4] = s[:, 1], s[:, 2]
+            return out
+        return stress
 
     def index(self, u: np.ndarray) -> np.ndarray:
         """(nel,) Hashin's interlaminar index on the crack plane of the band's elements ahead
-        of the window (0 elsewhere), at FEM displacement u (n, 2) m."""
-        s = self.built.dyn.region.centroid_strain_stress(u)[1][self._band]  # (k, 3) Voigt Pa
-        Z0, R0 = self._strengths
-        out = np.zeros(self.built.dyn.region.n_elements)
-        out[self._band] = (np.maximum(s[:, 1], 0.0) / Z0) ** 2 + (s[:, 2] / R0) ** 2
-        return out
+        of the window (0 elsewhere), at FEM displacement u (n, 2) m (a buffer rewritten at
+        each call)."""
+        return self._index(u)
 
     def contact_reach(self) -> float:
         """m: the farthest crack-plane bond of the window whose interlaminar index reached

@@ -44,13 +44,17 @@ class FemIndices:
         self.k = lam.strengths()
         self.Z0, self.R0 = lam.interface["Z0"], lam.interface["R0"]
 
-    def __call__(self, strain: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def ply_stress(self, strain: np.ndarray) -> np.ndarray:
+        """(nel, 6) Pa each element's stress in its ply's axes at its centroid strain (nel, ns)."""
         if self.dim == 2:  # plane strain: (xx, yy, xy) -> (xx, yy, zz = 0, yz = 0, xz = 0, xy)
             eps = np.zeros((len(strain), 6))
             eps[:, [0, 1, 5]] = strain
         else:
             eps = strain
-        ply = to_ply_axes(np.einsum("eij,ej->ei", self.C, eps), self.R)
+        return to_ply_axes(np.einsum("eij,ej->ei", self.C, eps), self.R)
+
+    def __call__(self, strain: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        ply = self.ply_stress(strain)
         return hashin_interlaminar(ply, self.Z0, self.R0), hoffman(ply, self.k)
 
 
@@ -69,15 +73,49 @@ class BondedIndices:
         self.k = bb.body_strengths()
         self.Z0, self.R0 = bb.adhesive["Z0"], bb.adhesive["R0"]
 
-    def __call__(self, strain: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def ply_stress(self, strain: np.ndarray) -> np.ndarray:
+        """(nel, 6) Pa the body's stress at each element's centroid strain (nel, ns)."""
         s = strain @ self.D.T
         if self.dim == 2:  # plane stress: (xx, yy, xy) -> (xx, yy, zz = 0, yz = 0, xz = 0, xy)
             sig = np.zeros((len(s), 6))
             sig[:, [0, 1, 5]] = s
         else:
             sig = s
-        ply = to_ply_axes(sig, self.R)
+        return to_ply_axes(sig, self.R)
+
+    def __call__(self, strain: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        ply = self.ply_stress(strain)
         return np.where(self.bottom, hashin_interlaminar(ply, self.Z0, self.R0), 0.0), hoffman(ply, self.k)
+
+
+class ElementIndex:
+    """The growth check's criterion at every element in one compiled pass (a check may come
+    at every FEM step): the larger of Hoffman's index where ``hoffman_on`` and Hashin's
+    interlaminar index where ``hashin_on`` (nel,) bool, and 0, at the centroid. The ply stress
+    is linear in the element's nodal displacement (small strain), so each element's map
+    L (6, nd) is ``ply_stress`` (strain (nel, ns) -> (nel, 6) Pa, the criteria's own) of its
+    centroid B's columns, taken once."""
+
+    def __init__(self, region, ply_stress, hoffman_on, hashin_on, strengths=None, Z0: float = 1.0,
+                 R0: float = 1.0):
+        from physics.kernels import hoffman_coefficients
+        B, self.dofs = region.centroid_B()
+        self.L = np.ascontiguousarray(np.stack([ply_stress(B[:, :, j]) for j in range(B.shape[2])], axis=-1))
+        k = (1.0,) * 9 if strengths is None else tuple(float(getattr(strengths, f)) for f in
+                                                         ("Xt", "Xc", "Yt", "Yc", "Zt", "Zc", "S23", "S13", "S12"))
+        self.c = hoffman_coefficients(k)
+        n = region.n_elements
+        self.hoffman_on = np.ascontiguousarray(np.broadcast_to(hoffman_on, n), np.bool_)
+        self.hashin_on = np.ascontiguousarray(np.broadcast_to(hashin_on, n), np.bool_)
+        self.Z0, self.R0 = float(Z0), float(R0)
+        self.out = np.empty(n)  # rewritten at every call
+
+    def __call__(self, u: np.ndarray) -> np.ndarray:
+        """(nel,) the criterion at FEM displacement u (n, dim) m: this object's buffer."""
+        from physics.kernels import element_failure_index
+        element_failure_index(u.reshape(-1), self.dofs, self.L, self.c, self.hoffman_on, self.Z0, self.R0,
+                              self.hashin_on, self.out)
+        return self.out
 
 
 def frames(built):

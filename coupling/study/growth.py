@@ -48,7 +48,7 @@ from scipy.spatial import cKDTree
 
 from ..params import CaseError
 from ..simulation import energy_scale
-from .fields import BondedIndices, FemIndices
+from .fields import BondedIndices, ElementIndex, FemIndices
 from .placement import criteria, grown_reach
 
 
@@ -176,15 +176,17 @@ class Growth:
     def _bind_criteria(self, built) -> None:
         region = built.dyn.region
         if built.bonded is None:
-            self._indices, self._criteria = FemIndices(region, built.lam, built.dim), criteria(self.p, built)
+            fi, which = FemIndices(region, built.lam, built.dim), criteria(self.p, built)
+            self._index = ElementIndex(region, fi.ply_stress, "Hoffman" in which, "interlaminar" in which, fi.k,
+                                       fi.Z0, fi.R0)
         else:  # the body's Hoffman, the adhesive's interlaminar index on the bottom row
-            self._indices, self._criteria = BondedIndices(region, built.bonded, built.dim), ["Hoffman", "interlaminar"]
+            bi = BondedIndices(region, built.bonded, built.dim)
+            self._index = ElementIndex(region, bi.ply_stress, True, bi.bottom, bi.k, bi.Z0, bi.R0)
 
     def index(self, u: np.ndarray) -> np.ndarray:
-        """(nel,) the far field's failure index that decides growth, at FEM displacement u."""
-        hashin, hoffman = self._indices(self.built.dyn.region.centroid_strain_stress(u)[0])
-        return np.maximum(hoffman if "Hoffman" in self._criteria else 0.0,
-                          hashin if "interlaminar" in self._criteria else 0.0)
+        """(nel,) the far field's failure index that decides growth, at FEM displacement u
+        (a buffer rewritten at each call)."""
+        return self._index(u)
 
     def _p(self, half_width: float) -> dict:
         """The parameters of the zone at ``half_width``, at the run's own step and substeps."""

@@ -1,0 +1,77 @@
+"""The growth check's compiled criterion (study/fields.ElementIndex) is the seed's criteria
+(physics/failure.py on FemIndices' ply stresses) at every element, on any mesh and laminate."""
+import numpy as np
+import pytest
+import skfem
+from hypothesis import given, settings, strategies as st
+
+from coupling.study.fields import ElementIndex, FemIndices
+from fem_region import materials
+from fem_region.elements import ELEMENTS
+from fem_region.region import FemRegion
+
+MESHES = {"quad4": skfem.MeshQuad, "tri3": skfem.MeshTri, "hex8": skfem.MeshHex, "tet4": skfem.MeshTet}
+
+
+def _laminate(angles, elastic: bool):
+    from coupling.study.assemble import Laminate
+    ply = dict(E11=140e9, E22=9e9, G12=5e9, G23=3.2e9, nu12=0.3, nu23=0.4, rho=1500.0, Xt=1.6e9, Xc=1.2e9,
+               Yt=50e6, Yc=200e6, S12=80e6, S23=60e6, Gf_fibre=4e4, Gf_matrix=300.0)
+    return Laminate(list(angles), [1] * len(angles), 1e-3 / len(angles), ply,
+                    dict(Z0=40e6, R0=25e6, GIc=200.0, GIIc=600.0, friction=0.3), elastic)
+
+
+@given(name=st.sampled_from(sorted(MESHES)), angles=st.lists(st.sampled_from([0.0, 90.0, 45.0, -30.0]),
+                                                            min_size=1, max_size=4),
+       which=st.sampled_from([(True, True), (True, False), (False, True)]), seed=st.integers(0, 2**31),
+       strain=st.floats(1e-4, 3e-2))
+@settings(max_examples=40, deadline=None)
+def test_the_compiled_index_is_the_seed_criteria_at_every_element(name, angles, which, seed, strain):
+    e = ELEMENTS[name]
+    m = MESHES[name].init_tensor(*[np.linspace(0, 1e-3, 4)] * e.dim)
+    lam = _laminate(angles if e.dim == 3 else [a for a in angles if a in (0.0, 90.0)] or [0.0], elastic=False)
+    D = materials.reduce(lam.stiffness(0.0, e.dim), e.dim, "plane_strain")
+    region = FemRegion(m, e, D, 1500.0, 1.0)
+    fi = FemIndices(region, lam, e.dim)
+    hoff_on, hashin_on = which
+    index = ElementIndex(region, fi.ply_stress, hoff_on, hashin_on, fi.k, fi.Z0, fi.R0)
+    u = strain * 1e-3 * np.random.default_rng(seed).standard_normal(region.X.shape)  # a rough field
+    hashin, hoffman = fi(region.centroid_strain_stress(u)[0])
+    expect = np.maximum(hoffman if hoff_on else 0.0, hashin if hashin_on else 0.0)
+    got = index(u)
+    assert got.shape == (region.n_elements,)
+    np.testing.assert_allclose(got, expect, rtol=1e-10, atol=1e-12 * np.abs(expect).max())
+
+
+def test_per_element_switches_and_elastic_plies():
+    """Hashin only where hashin_on (a bonded beam's bottom row), Hoffman off the elements where
+    hoffman_on is False; infinite strengths (elastic plies) give a Hoffman index of 0."""
+    e = ELEMENTS["quad4"]
+    m = skfem.MeshQuad.init_tensor(np.linspace(0, 2e-3, 5), np.linspace(0, 1e-3, 3))
+    lam = _laminate([0.0, 90.0], elastic=True)
+    region = FemRegion(m, e, lam.D(0.0), 1500.0, 1.0)
+    fi = FemIndices(region, lam, 2)
+    rows = np.random.default_rng(3).random(region.n_elements) < 0.5
+    u = 1e-5 * np.random.default_rng(4).standard_normal(region.X.shape)
+    hashin, hoffman = fi(region.centroid_strain_stress(u)[0])
+    assert np.all(hoffman == 0.0)
+    got = ElementIndex(region, fi.ply_stress, True, rows, fi.k, fi.Z0, fi.R0)(u)
+    np.testing.assert_allclose(got, np.where(rows, hashin, 0.0), rtol=1e-10, atol=1e-300)
+    assert np.all(got[~rows] == 0.0) and np.any(got[rows] > 0.0)
+
+
+def test_the_window_s_crack_plane_index_is_hashin_s_on_the_band():
+    """A specimen's window (scenes/window_growth.py): Hashin's index of the centroid s_yy and
+    s_xy on the band's elements, 0 elsewhere."""
+    from coupling.scenes.window_growth import WindowGrowth
+    e = ELEMENTS["quad4"]
+    m = skfem.MeshQuad.init_tensor(np.linspace(0, 4e-3, 9), np.linspace(0, 2e-3, 5))
+    region = FemRegion(m, e, materials.reduce(materials.isotropic(10e9, 0.3), 2, "plane_strain"), 1500.0, 1.0)
+    band = np.arange(region.n_elements) % 3 == 0
+    Z0, R0 = 30e6, 60e6
+    u = 1e-6 * np.random.default_rng(5).standard_normal(region.X.shape)
+    s = region.centroid_strain_stress(u)[1]
+    expect = np.where(band, (np.maximum(s[:, 1], 0.0) / Z0) ** 2 + (s[:, 2] / R0) ** 2, 0.0)
+    got = ElementIndex(region, WindowGrowth._plane_stress(region), False, band, None, Z0, R0)(u)
+    np.testing.assert_allclose(got, expect, rtol=1e-10, atol=1e-300)
+    assert np.all(got[band] > 0)
