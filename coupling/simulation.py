@@ -239,13 +239,16 @@ def run_clock(sim: Simulation, on_sample: Callable[[int, float], None] | None = 
             nxt = min(sim.n_steps, _next_multiple(step, sim.history_every),
                       _next_multiple(step, frame_every) if frame_every and on_frame else sim.n_steps,
                       _next_multiple(step, checkpoint_every) if can_save else sim.n_steps,
-                      _next_multiple(step, grow_every) if grow_every else sim.n_steps)
+                      _next_multiple(step, grow_every) if grow_every else sim.n_steps,
+                      # (a check between samples that asked to convert: at the next step, the clock's whole snapshot)
+                      sim.growth.pending if sim.growth is not None and sim.growth.pending > step else sim.n_steps)
             run_stages(sim.stages, nxt - step)
             step = nxt
             sampled = step % sim.history_every == 0 or step == sim.n_steps
             if sampled:
                 sample(step)
-            if sim.growth is not None and step < sim.n_steps and (sampled or (grow_every and step % grow_every == 0)):
+            if sim.growth is not None and step < sim.n_steps and (
+                    sampled or (grow_every and step % grow_every == 0) or step == sim.growth.pending):
                 if not sampled:
                     sync()  # (the growth reads the participants' snapshots)
                 t0 = clock()

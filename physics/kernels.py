@@ -403,3 +403,30 @@ def element_failure_index(u, edofs, L, c, hoffman_on, Z0, R0, hashin_on, out):
             n = max(s3, 0.0)
             best = max(best, (n / Z0) ** 2 + (t13 ** 2 + t23 ** 2) / R0 ** 2)
         out[e] = best
+
+
+@kernel
+def damaged_reach(reach, damage):
+    """m: the largest reach (nb,) of the bonds whose damage (nb,) is above 0; -1 if none."""
+    out = -1.0
+    for b in range(damage.shape[0]):
+        if damage[b] > 0.0 and reach[b] > out:
+            out = reach[b]
+    return out
+
+
+@kernel
+def touched_reach(x, centre, axis, radius, ncols):
+    """m: the largest |x[i, c]|, c < ncols, over the points x (k, 3) closer than radius to
+    ``centre`` (3,), or to the axis (3,) through it when the axis is not zero; -1 if none."""
+    aa = axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]
+    out = -1.0
+    for i in range(x.shape[0]):
+        r0, r1, r2 = x[i, 0] - centre[0], x[i, 1] - centre[1], x[i, 2] - centre[2]
+        if aa > 0.0:  # the distance from the axis
+            s = (r0 * axis[0] + r1 * axis[1] + r2 * axis[2]) / aa
+            r0, r1, r2 = r0 - s * axis[0], r1 - s * axis[1], r2 - s * axis[2]
+        if np.sqrt(r0 * r0 + r1 * r1 + r2 * r2) < radius:
+            for c in range(ncols):
+                out = max(out, abs(x[i, c]))
+    return out

@@ -84,6 +84,35 @@ def test_the_grown_model_holds_the_beam_s_mass_and_covers_what_the_criterion_fla
     assert hoffman.max() < p["zone.grow_at"]
 
 
+def test_a_zone_checked_at_every_fem_step_converts_between_samples():
+    """zone.grow_every = 1 (the issue's "each FEM step"): a check takes the FEM's state only and
+    evaluates the compiled criterion; when the zone must grow it converts at the next step,
+    where the clock takes its whole snapshot. The coarse beam struck at 12 m/s from 3 mm,
+    samples every 50 steps: conversions between samples, momentum to round-off, whole spacings
+    that only grow, no damage at the zone's edge, and its first conversion no later than with
+    checks at the samples only (the two runs are one until then, and a check at every step sees
+    every sample's state)."""
+    def grown(every: int):
+        case = load_case("beam_impact_coarse", dict(GROW, **{"clock.t_end": 1.5e-5, "zone.grow_every": every,
+                                                              "output.history_every": 50}))
+        sim = case.scene.build(case.parameters, "coupled", "liggghts")
+        try:
+            return run_clock(sim), case.scene.growth
+        finally:
+            case.scene.growth.sim.close()
+
+    sampled = grown(0)
+    result, growth = grown(1)
+    steps = np.array([e[0] for e in growth.events]) / growth.sim.dt
+    assert len(steps) >= 2 and np.any(np.abs(steps / 50 - np.round(steps / 50)) > 1e-6), steps
+    assert all(e[3] < 1e-12 for e in growth.events)
+    d = 2 * 0.15e-3
+    widths = np.array([e[1] for e in growth.events])
+    assert np.all(np.diff(np.concatenate([[3e-3], widths])) > 0) and np.allclose(widths / d, np.round(widths / d))
+    assert max(result["history"]["damage_at_zone_edge"]) == 0.0
+    assert growth.events[0][0] <= sampled[1].events[0][0] + 1e-6 * growth.sim.dt
+
+
 def _resumed_as_straight(tmp_path, name: str, sets: dict, dem: str, at: float):
     """A run that checkpoints once, at the fraction ``at`` of its steps, after its zone grew, and
     the run resumed from that checkpoint in a new model (the first zone's, rebuilt to the

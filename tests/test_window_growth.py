@@ -167,6 +167,48 @@ def test_a_window_resumed_after_a_conversion_finishes_as_the_uninterrupted_one(t
         assert np.array_equal(v, resumed["history"][k], equal_nan=True), k
 
 
+@pytest.mark.slow
+def test_a_checkpoint_at_a_check_that_asked_to_convert_resumes_as_the_uninterrupted_run(tmp_path, monkeypatch):
+    """A check between samples takes the FEM's state only and, when the window must grow,
+    converts at the next step with the clock's whole snapshot. A checkpoint written at such a
+    check (the conversion pending) resumes to the uninterrupted run's history, bit for bit:
+    the pending conversion comes at the same step. dcb_coarse, checks every 293 steps, samples
+    every 1,000; the checkpoint's step is taken from where the run converted."""
+    import shutil
+    from coupling import checkpoint
+    sets = {"zone.grow": True, "clock.t_end": 1.5e-3, "zone.grow_every": 293, "output.history_every": 1000}
+
+    def run(**kw):
+        _, sim = _model("dcb_coarse", sets)
+        result = None
+        try:
+            result = run_clock(sim, **kw)
+            return result["history"], result["simulation"].growth
+        finally:
+            (result["simulation"] if result else sim).close()
+
+    _, growth = run()
+    steps = np.round(np.array([t for t, *_ in growth.events]) / growth.sim.dt).astype(int)
+    asked = steps[steps % 1000 != 0] - 1  # the checks that asked to convert
+    assert asked.size and np.all(asked % 293 == 0), steps
+    at = int(asked[0])
+    kept, write = tmp_path / "kept", checkpoint.write
+
+    def keep(run_dir, state, engine_save=None):  # the checkpoint written at the check, kept aside
+        write(run_dir, state, engine_save)
+        if int(state["loop"]["step"]) == at:
+            shutil.copytree(checkpoint.latest(run_dir), kept)
+
+    monkeypatch.setattr(checkpoint, "write", keep)
+    (tmp_path / "run").mkdir()
+    straight, _ = run(run_dir=tmp_path / "run", checkpoint_every=at)
+    assert int(checkpoint.read(kept)["loop"]["growth"]["pending"]) == at + 1
+    resumed, growth = run(resume_from=kept)
+    for k, v in straight.items():
+        assert np.array_equal(v, resumed[k], equal_nan=True), k
+    assert np.any(np.abs(np.array([t for t, *_ in growth.events]) / growth.sim.dt - (at + 1)) < 1e-6)
+
+
 def _grown(sets: dict) -> tuple[dict, object]:
     """(history, Growth) of dcb_coarse grown in process with ``sets``."""
     _, sim = _model("dcb_coarse", {"zone.grow": True, **sets})
@@ -182,15 +224,19 @@ def test_growth_checked_between_samples_keeps_a_short_lead():
     """zone.grow_every checks the growth between history samples. dcb_coarse with a 2 mm lead
     and samples every 2,000 steps (11 a run): checked at the samples only, the crack reaches the
     window's edge between two checks (damage there); checked every 200 steps, the edge stays
-    undamaged at every sample, and the conversions come at checks, some between samples."""
+    undamaged at every sample, and the conversions come at the samples or at the step after a
+    check between samples (a check takes the FEM's state only; the conversion takes the
+    clock's whole snapshot, at the next step), some between samples."""
     sets = {"zone.margin": 0.002, "output.history_every": 2000}
     h, _ = _grown(sets)
     assert max(h["damage_at_zone_edge"]) > 0  # the lead is too short for the samples alone
     h, growth = _grown({**sets, "zone.grow_every": 200})
     assert max(h["damage_at_zone_edge"]) == 0.0
     steps = np.array([t for t, *_ in growth.events]) / growth.sim.dt
-    assert np.allclose(steps, 200 * np.round(steps / 200), rtol=0, atol=1e-6)
-    assert np.any(np.round(steps) % 2000 != 0)
+    assert np.allclose(steps, np.round(steps), rtol=0, atol=1e-6)
+    steps = np.round(steps).astype(int)
+    assert np.all(np.where(steps % 2000 == 0, 0, steps % 200 - 1) == 0), steps
+    assert np.any(steps % 2000 != 0)
     assert np.all(np.abs(growth.history()["zone.conversion_momentum_jump"]) < 1e-12)
 
 

@@ -72,8 +72,11 @@ class CoupledClock:
         self.momentum_snapshot = np.zeros(3)
         self.snapshot_every = 1  # FEM steps between snapshots (the history interval) ...
         self.last_window = -1  # ... and at this FEM step
-        self.check_every = 0  # ... and every so many (a growing zone's checks between samples, 0: none),
-        self.first_step = 0  # counted in the run's steps, of which this clock's first is this one
+        self.check_every = 0  # a growing zone's checks between samples (0: none): FEM steps between them,
+        self.first_step = 0  # counted in the run's steps, of which this clock's first is this one; a
+        # check takes only the FEM's state (u_snapshot, t_snapshot), and asks for the whole snapshot
+        self.full_at = -1  # at this FEM step of the run's count when it wants to convert (-1: none)
+        self.snapshot_full = False  # the last snapshot is the whole one (not a check's state only)
         self._m_dem = dem.scene.mass * tie.free_particles(dem.scene.n)
         # the elements touching the interface nodes are fast forces too: then no slow impulse
         # lands on a node the DEM moves, and the scheme does not resonate (see module doc)
@@ -126,10 +129,12 @@ class CoupledClock:
             fem.compute_forces()
             n = self.k // self.m
             r = n + self.first_step  # in the run's count
-            check = self.check_every and r % self.check_every == 0
-            if r % self.snapshot_every == 0 or n == self.last_window or check:  # at t_n, before the kicks
+            if r % self.snapshot_every == 0 or n == self.last_window or r == self.full_at:  # at t_n, before the kicks
                 self._kicks(self._band_f, True, False)
                 self._snapshot(self._f_fast, self._a_slow)
+            elif self.check_every and r % self.check_every == 0:  # a growth check: the FEM's state only
+                np.copyto(self.u_snapshot, fem.state.u)
+                self.t_snapshot, self.snapshot_full = fem.state.t, False
 
     def _fem_kick_drift(self) -> None:
         fem = self.fem
@@ -157,6 +162,7 @@ class CoupledClock:
         # the FEM's velocity and time before this step's kicks: where a grown zone's model
         # continues from (coupling/study/growth.py)
         self.v_start_snapshot, self.t_snapshot = fem.state.v.copy(), fem.state.t
+        self.snapshot_full = True
         P = np.zeros(3)
         P[: fem.region.dim] = fem.m @ fem.state.v
         self.momentum_snapshot = P + self._m_dem @ self.dem.velocities() + sum((m.momentum() for m in self.models),

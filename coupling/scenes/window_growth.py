@@ -208,6 +208,9 @@ class WindowGrowth(Growth):
         at &= bonds.damage < 1.0  # (the crack's faces in contact: not a process zone)
         return float(bonds.X[bonds.pairs[at, 0], 0].max()) if at.any() else -1.0
 
+    def _reaches(self, built) -> list:
+        return []
+
     def damage_reach(self) -> float:
         """-1: the window's crack-plane bonds are contact_reach's (their damage is the crack the
         window follows)."""

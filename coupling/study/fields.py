@@ -17,6 +17,7 @@ import numpy as np
 
 from fem_region import materials
 from physics.failure import hashin_interlaminar, hoffman, to_ply_axes
+from physics.kernels import element_failure_index, hoffman_coefficients
 
 from ..simulation import FieldFrame
 
@@ -98,7 +99,6 @@ class ElementIndex:
 
     def __init__(self, region, ply_stress, hoffman_on, hashin_on, strengths=None, Z0: float = 1.0,
                  R0: float = 1.0):
-        from physics.kernels import hoffman_coefficients
         B, self.dofs = region.centroid_B()
         self.L = np.ascontiguousarray(np.stack([ply_stress(B[:, :, j]) for j in range(B.shape[2])], axis=-1))
         k = (1.0,) * 9 if strengths is None else tuple(float(getattr(strengths, f)) for f in
@@ -112,7 +112,6 @@ class ElementIndex:
 
     def __call__(self, u: np.ndarray) -> np.ndarray:
         """(nel,) the criterion at FEM displacement u (n, dim) m: this object's buffer."""
-        from physics.kernels import element_failure_index
         element_failure_index(u.reshape(-1), self.dofs, self.L, self.c, self.hoffman_on, self.Z0, self.R0,
                               self.hashin_on, self.out)
         return self.out

@@ -46,6 +46,8 @@ from dataclasses import replace
 import numpy as np
 from scipy.spatial import cKDTree
 
+from physics.kernels import damaged_reach, touched_reach
+
 from ..params import CaseError
 from ..simulation import energy_scale
 from .fields import BondedIndices, ElementIndex, FemIndices
@@ -122,6 +124,7 @@ class Growth:
         self.offset = {"external_work": 0.0, "dissipated": 0.0}  # J, the ledger's accounts carried over
         self.limit_warning = ""
         self.step0 = 0  # the loop step the current model started at
+        self.pending = -1  # the loop step a check asked to convert at (its whole snapshot), -1: none
         self.wall = 0.0  # s spent converting (building the grown zones' models)
         # released (study/seeded.py): the engine holds the reserve from the start and goes on
         # across conversions; rebuild: a new engine for each zone
@@ -158,11 +161,13 @@ class Growth:
         built.clock.last_window = sim.n_steps - self.step0
         # the participants' snapshots at the checks between samples too, counted in the run's steps
         built.clock.check_every, built.clock.first_step = self.every, self.step0
+        built.clock.full_at = self.pending
         sim.probes["zone_half_width"] = lambda: self.half_width
         energies = sim.energies
         sim.energies = lambda: {k: v + self.offset.get(k, 0.0) for k, v in energies().items()}
         region = built.dyn.region
         self._bind_criteria(built)
+        self._bond_reach = self._reaches(built)
         X = region.X[region.mesh.t.T]  # (nel, nodes, dim)
         # each element's nearest and farthest distance from the centre: along x, or max(x, y) (a square)
         self._x0, self._x1 = X[:, :, 0].min(axis=1), X[:, :, 0].max(axis=1)
@@ -180,8 +185,9 @@ class Growth:
             self._index = ElementIndex(region, fi.ply_stress, "Hoffman" in which, "interlaminar" in which, fi.k,
                                        fi.Z0, fi.R0)
         else:  # the body's Hoffman, the adhesive's interlaminar index on the bottom row
-            bi = BondedIndices(region, built.bonded, built.dim)
-            self._index = ElementIndex(region, bi.ply_stress, True, bi.bottom, bi.k, bi.Z0, bi.R0)
+            fi = BondedIndices(region, built.bonded, built.dim)
+            self._index = ElementIndex(region, fi.ply_stress, True, fi.bottom, fi.k, fi.Z0, fi.R0)
+        self._indices = fi  # (the criteria one by one, in numpy: (hashin, hoffman) of centroid strains)
 
     def index(self, u: np.ndarray) -> np.ndarray:
         """(nel,) the far field's failure index that decides growth, at FEM displacement u
@@ -212,15 +218,19 @@ class Growth:
         (the particles under it) from the start, as placement takes a punch's."""
         reach = -1.0
         for m in self.built.impactors.values():
-            x = self.built.backend.positions_of(m.ids)
-            r = x - m.imp.x
-            if m.imp.axis is not None:  # a cylinder: the distance from its axis
-                a = np.asarray(m.imp.axis, float)
-                r = r - np.outer(r @ a, a) / (a @ a)
-            touching = np.linalg.norm(r, axis=1) < m.imp.radius
-            if m.imp.shape in ("sphere", "cylinder", "rod") and touching.any():
-                reach = max(reach, float(np.abs(x[touching, : 2 if self.plane else 1]).max()))
+            if m.imp.shape in ("sphere", "cylinder", "rod"):
+                axis = np.zeros(3) if m.imp.axis is None else np.asarray(m.imp.axis, float)  # (a cylinder's)
+                reach = max(reach, touched_reach(self.built.backend.positions_of(m.ids), np.asarray(m.imp.x, float),
+                                                 axis, float(m.imp.radius), 2 if self.plane else 1))
         return reach
+
+    def _reaches(self, built) -> list:
+        """[(LawBonds, each bond's reach from the centre, its nearer end's (nb,) m)] of the
+        families damage_reach reads (probes.uncarried)."""
+        from .probes import uncarried
+        x = built.lattice.x
+        r = np.abs(x[:, : 2 if self.plane else 1]).max(axis=1)
+        return [(b, np.ascontiguousarray(r[b.pairs].min(axis=1))) for b in uncarried(built)]
 
     def damage_reach(self) -> float:
         """m: the farthest damaged bond of the zone whose damage the far field could not carry on
@@ -228,11 +238,7 @@ class Growth:
         its nearer end; -1 if none. Damage that comes within the margin of the edge grows the
         zone as the far field's index does: the rod's punch through a disc cracks the plies
         out from its edge before any element beyond reaches grow_at."""
-        from .probes import uncarried
-        x = self.built.lattice.x
-        r = np.abs(x[:, : 2 if self.plane else 1]).max(axis=1)
-        reach = [r[b.pairs[b.damage > 0]].min(axis=1).max(initial=-1.0) for b in uncarried(self.built)]
-        return float(max(reach, default=-1.0))
+        return max((damaged_reach(r, b.damage) for b, r in self._bond_reach), default=-1.0)
 
     def __call__(self, step: int):
         """The Simulation of the grown zone if the far field, the contact or the zone's own damage
@@ -240,6 +246,7 @@ class Growth:
         at grow_at, or a contact patch or damage the far field cannot carry on closer than the
         margin to the edge."""
         clock = self.built.clock
+        self.pending = -1
         index = self.index(clock.u_snapshot)
         flagged = index >= self.grow_at
         w = self.half_width
@@ -258,6 +265,9 @@ class Growth:
                     f"{(reach + self.margin) * 1e3:.4g} mm, beyond {self.limit_name} = {self.limit * 1e3:.4g} mm: the zone "
                     "grows no further")
                 self.sim.warnings.append(self.limit_warning)
+            return None
+        if not clock.snapshot_full:  # a check between samples: the conversion at the next FEM step,
+            self.pending = clock.full_at = step + 1  # where the clock takes the whole snapshot (run_clock stops there)
             return None
         return self.convert(float(target), step)
 
@@ -301,7 +311,8 @@ class Growth:
     def state(self) -> dict:
         d = {"half_width": self.half_width, "events": np.array(self.events).reshape(-1, 4),
              "offset": np.array([self.offset["external_work"], self.offset["dissipated"]]),
-             "limit_warning": np.frombuffer(self.limit_warning.encode(), np.uint8), "step0": self.step0}
+             "limit_warning": np.frombuffer(self.limit_warning.encode(), np.uint8), "step0": self.step0,
+             "pending": self.pending}
         if self.engine_start is not None:
             d["engine_x"], d["engine_v"] = self.engine_start
         return d
@@ -314,6 +325,7 @@ class Growth:
         self.offset = {"external_work": float(off[0]), "dissipated": float(off[1])}
         self.limit_warning = bytes(np.asarray(state["limit_warning"], np.uint8)).decode()
         self.step0 = int(state["step0"])
+        self.pending = self.built.clock.full_at = int(state.get("pending", -1))
         if self.limit_warning and self.limit_warning not in sim.warnings:
             sim.warnings.append(self.limit_warning)
         w = float(state["half_width"])
