@@ -10,10 +10,12 @@ Part 2, whole runs of the same case in fresh processes (`femdem run`), growth ch
 history samples only (grow_every = 0) and at every FEM step (1), samples every --history-every
 steps, over a span in which the zone does not grow, so that the two runs are the same run and
 differ by the checks alone: median wall times of --runs each, their ratio, and the cost per
-check (the check's own work, and the loop's stop there: the engine's run is cut at each).
+check (the check's own work, and the loop's stop there: the engine's run is cut at each, and an
+engine in a worker process (LAMMPS) or behind YADE's Python API pays a call per run).
 
 Usage: .venv/bin/python benchmarks/growth_check.py [--case beam_impact_coarse] [--zone 3e-3]
            [--t-end 6e-5] [--t-run 3e-5] [--repeat 200] [--runs 3] [--history-every 100]
+           [--dem liggghts yade lammps]
 """
 from __future__ import annotations
 
@@ -67,9 +69,9 @@ def parts(case: str, sets: dict, t_run: float, repeat: int) -> None:
         sim.close()
 
 
-def wall(case: str, sets: dict, every: int, out: Path) -> tuple[float, int]:
+def wall(case: str, dem: str, sets: dict, every: int, out: Path) -> tuple[float, int]:
     """(wall s, clock steps) of one `femdem run`."""
-    cmd = [sys.executable, "-m", "coupling.cli", "run", case, "--dem", "liggghts", "--out", str(out), "--quiet",
+    cmd = [sys.executable, "-m", "coupling.cli", "run", case, "--dem", dem, "--out", str(out), "--quiet",
            *(a for k, v in dict(sets, **{"zone.grow_every": every}).items() for a in ("--set", f"{k}={v}"))]
     t0 = time.perf_counter()
     done = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
@@ -90,26 +92,27 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=200)
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--history-every", type=int, default=100, help="steps between history samples (both runs)")
+    ap.add_argument("--dem", nargs="+", default=["liggghts", "yade", "lammps"])
     a = ap.parse_args()
     sets = {"zone.grow": "true", "zone.half_width": a.zone}
     parts(a.case, {"zone.grow": True, "zone.half_width": a.zone}, a.t_run, a.repeat)
     sets.update({"clock.t_end": a.t_end, "output.history_every": a.history_every})
-    times: dict[int, list[float]] = {0: [], 1: []}
-    steps = 0
-    with tempfile.TemporaryDirectory() as tmp:
-        for r in range(a.runs + 1):  # the first round compiles numba's caches: not counted
-            for every in times:
-                t, steps = wall(a.case, sets, every, Path(tmp) / f"run-{every}-{r}")
-                if r:
-                    times[every].append(t)
-    t0, t1 = statistics.median(times[0]), statistics.median(times[1])
-    checks = steps - steps // a.history_every  # the checks that are no sample's
-    print(f"\nwhole runs, {a.case} from {a.zone * 1e3:g} mm to {a.t_end:g} s ({steps} FEM steps, a sample every "
-          f"{a.history_every}), medians of {a.runs}:")
-    print("| growth checked | wall [s] |\n|---|---|")
-    print(f"| at the samples only (grow_every = 0) | {t0:.2f} |\n| at every FEM step (grow_every = 1) | {t1:.2f} |")
-    print(f"ratio {t1 / t0:.3f}; {1e6 * (t1 - t0) / checks:.0f} us per check between samples (the loop stops there: "
-          "the engine's run is cut at each)")
+    print(f"\nwhole runs, {a.case} from {a.zone * 1e3:g} mm to {a.t_end:g} s (a sample every {a.history_every} FEM "
+          f"steps), medians of {a.runs}:")
+    print("| engine | FEM steps | checked at the samples only [s] | at every FEM step [s] | ratio | per check [us] |")
+    print("|---|---|---|---|---|---|")
+    for dem in a.dem:
+        times: dict[int, list[float]] = {0: [], 1: []}
+        steps = 0
+        with tempfile.TemporaryDirectory() as tmp:
+            for r in range(a.runs + 1):  # the first round compiles numba's caches: not counted
+                for every in times:
+                    t, steps = wall(a.case, dem, sets, every, Path(tmp) / f"run-{every}-{r}")
+                    if r:
+                        times[every].append(t)
+        t0, t1 = statistics.median(times[0]), statistics.median(times[1])
+        checks = steps - steps // a.history_every  # the checks that are no sample's
+        print(f"| {dem} | {steps} | {t0:.2f} | {t1:.2f} | {t1 / t0:.3f} | {1e6 * (t1 - t0) / checks:.0f} |")
 
 
 if __name__ == "__main__":

@@ -385,6 +385,9 @@ def element_failure_index(u, edofs, L, c, hoffman_on, Z0, R0, hashin_on, out):
     c = hoffman_coefficients(strengths). The growth check's criterion, at up to every FEM step."""
     q23, q31, q12, l1, l2, l3, S23, S13, S12 = c
     for e in range(L.shape[0]):
+        if not (hoffman_on[e] or hashin_on[e]):  # (a window's elements off its band)
+            out[e] = 0.0
+            continue
         s1 = s2 = s3 = t23 = t13 = t12 = 0.0
         for j in range(L.shape[2]):
             x = u[edofs[e, j]]
@@ -424,9 +427,43 @@ def touched_reach(x, centre, axis, radius, ncols):
     for i in range(x.shape[0]):
         r0, r1, r2 = x[i, 0] - centre[0], x[i, 1] - centre[1], x[i, 2] - centre[2]
         if aa > 0.0:  # the distance from the axis
-            s = (r0 * axis[0] + r1 * axis[1] + r2 * axis[2]) / aa
-            r0, r1, r2 = r0 - s * axis[0], r1 - s * axis[1], r2 - s * axis[2]
+            s = r0 * axis[0] + r1 * axis[1] + r2 * axis[2]
+            r0, r1, r2 = r0 - s * axis[0] / aa, r1 - s * axis[1] / aa, r2 - s * axis[2] / aa
         if np.sqrt(r0 * r0 + r1 * r1 + r2 * r2) < radius:
             for c in range(ncols):
                 out = max(out, abs(x[i, c]))
     return out
+
+
+@kernel
+def cohesive_reach(traction, normal, damage, x, Z0, R0, at):
+    """m: the largest x (nb,) of the cohesive bonds whose Hashin index on their last traction
+    (nb, 3) Pa, across their normal (nb, 3), reached ``at``, or that are damaged but not yet
+    failed (the cohesive zone and what is about to join it); -1 if none."""
+    out = -1.0
+    for b in range(damage.shape[0]):
+        if damage[b] >= 1.0:  # (the crack's faces in contact: not a process zone)
+            continue
+        tn = traction[b, 0] * normal[b, 0] + traction[b, 1] * normal[b, 1] + traction[b, 2] * normal[b, 2]
+        s0, s1, s2 = (traction[b, 0] - tn * normal[b, 0], traction[b, 1] - tn * normal[b, 1],
+                      traction[b, 2] - tn * normal[b, 2])
+        n = max(tn, 0.0)
+        if damage[b] > 0.0 or (n / Z0) ** 2 + (s0 * s0 + s1 * s1 + s2 * s2) / R0 ** 2 >= at:
+            out = max(out, x[b])
+    return out
+
+
+@kernel
+def flagged_reach(index, order, x0, x1, at, start, margin):
+    """m: the reach from x = 0 of a zone ``start`` wide grown over every element whose index
+    (nel,) reached ``at`` and that begins (x0 (nel,) m) within ``margin`` of the reach so far, up
+    to its end (x1); order: the elements by x0 (placement.grown_reach over the flagged ones)."""
+    r = start
+    for k in range(order.shape[0]):
+        e = order[k]
+        if index[e] < at:
+            continue
+        if x0[e] > r + margin:
+            break
+        r = max(r, x1[e])
+    return r

@@ -75,3 +75,55 @@ def test_the_window_s_crack_plane_index_is_hashin_s_on_the_band():
     got = ElementIndex(region, WindowGrowth._plane_stress(region), False, band, None, Z0, R0)(u)
     np.testing.assert_allclose(got, expect, rtol=1e-10, atol=1e-300)
     assert np.all(got[band] > 0)
+
+
+@given(seed=st.integers(0, 2**31), n=st.integers(0, 60), at=st.floats(0.05, 2.0))
+@settings(max_examples=40, deadline=None)
+def test_the_compiled_reaches_are_their_numpy_forms(seed, n, at):
+    """The check's other reductions (physics/kernels.py) against the numpy forms they replaced
+    (coupling/study/growth.py and scenes/window_growth.py until session 38): the farthest
+    damaged bond, the farthest particle inside a sphere or a cylinder, the farthest crack-plane
+    bond in or about to join the cohesive zone."""
+    from physics.kernels import cohesive_reach, damaged_reach, touched_reach
+    rng = np.random.default_rng(seed)
+    reach, damage = rng.random(n), np.where(rng.random(n) < 0.3, rng.random(n), 0.0)
+    assert damaged_reach(reach, damage) == (reach[damage > 0].max() if np.any(damage > 0) else -1.0)
+    x, centre, radius = rng.normal(size=(n, 3)), rng.normal(size=3), 1.2
+    for axis in (None, rng.normal(size=3)):
+        r = x - centre
+        if axis is not None:
+            r = r - np.outer(r @ axis, axis) / (axis @ axis)
+        touching = np.linalg.norm(r, axis=1) < radius
+        for cols in (1, 2):
+            expect = float(np.abs(x[touching, :cols]).max()) if touching.any() else -1.0
+            assert touched_reach(x, centre, np.zeros(3) if axis is None else axis, radius, cols) == expect
+    t, normal = 30e6 * rng.normal(size=(n, 3)), rng.normal(size=(n, 3))
+    normal /= np.linalg.norm(normal, axis=1)[:, None]
+    damage = np.where(rng.random(n) < 0.3, rng.choice([0.5, 1.0], n), 0.0)
+    Z0, R0, xb = 30e6, 40e6, rng.random(n)
+    tn = np.einsum("bi,bi->b", t, normal)
+    ts = np.linalg.norm(t - tn[:, None] * normal, axis=1)
+    index = (np.maximum(tn, 0.0) / Z0) ** 2 + (ts / R0) ** 2
+    near = np.abs(index - at) < 1e-12 * at  # (the two forms round apart only on the threshold)
+    chosen = ((index >= at) | (damage > 0)) & (damage < 1.0) & ~near
+    got = cohesive_reach(t, normal, damage, xb, Z0, R0, at)
+    if not near.any():
+        assert got == (xb[chosen].max() if chosen.any() else -1.0)
+
+
+@given(seed=st.integers(0, 2**31), n=st.integers(0, 50), at=st.floats(0.1, 1.0), start=st.floats(0.0, 0.5),
+       margin=st.floats(0.0, 0.3))
+@settings(max_examples=60, deadline=None)
+def test_the_compiled_flagged_reach_is_placement_s(seed, n, at, start, margin):
+    """Growth's reach over the flagged elements (physics/kernels.flagged_reach, the elements
+    sorted once) against placement.grown_reach over the flagged ones, on elements that overlap,
+    touch and leave gaps (x0 on a coarse grid, so that ties occur)."""
+    from coupling.study.placement import grown_reach
+    from physics.kernels import flagged_reach
+    rng = np.random.default_rng(seed)
+    x0 = np.round(rng.random(n) * 10) / 10
+    x1 = x0 + rng.random(n) * 0.3
+    index = rng.random(n) * 1.2
+    flagged = index >= at
+    expect = grown_reach(x0[flagged], x1[flagged], start, margin)
+    assert flagged_reach(index, np.argsort(x0, kind="stable"), x0, x1, at, start, margin) == expect

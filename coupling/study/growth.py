@@ -46,12 +46,12 @@ from dataclasses import replace
 import numpy as np
 from scipy.spatial import cKDTree
 
-from physics.kernels import damaged_reach, touched_reach
+from physics.kernels import damaged_reach, flagged_reach, touched_reach
 
 from ..params import CaseError
 from ..simulation import energy_scale
 from .fields import BondedIndices, ElementIndex, FemIndices
-from .placement import criteria, grown_reach
+from .placement import criteria
 
 
 def matches(a: np.ndarray, b: np.ndarray, tol: float) -> np.ndarray:
@@ -173,6 +173,7 @@ class Growth:
         self._x0, self._x1 = X[:, :, 0].min(axis=1), X[:, :, 0].max(axis=1)
         if self.plane:
             self._x0, self._x1 = np.maximum(self._x0, X[:, :, 1].min(axis=1)), np.maximum(self._x1, X[:, :, 1].max(axis=1))
+        self._order = np.argsort(self._x0, kind="stable")  # (the elements from the centre out: flagged_reach)
 
     def snap(self, x: float) -> float:
         """m, the first edge a zone may have at or beyond x: whole particle spacings."""
@@ -248,9 +249,8 @@ class Growth:
         clock = self.built.clock
         self.pending = -1
         index = self.index(clock.u_snapshot)
-        flagged = index >= self.grow_at
         w = self.half_width
-        reach = grown_reach(self._x0[flagged], self._x1[flagged], w, self.margin)
+        reach = flagged_reach(index, self._order, self._x0, self._x1, self.grow_at, w, self.margin)
         contact = max(self.contact_reach(), self.damage_reach())
         near = contact >= 0 and contact + self.margin > w * (1 + 1e-9)  # (none: nothing to follow)
         if reach <= w * (1 + 1e-9) and not near:
