@@ -1,7 +1,6 @@
 """The growth check's compiled criterion (study/fields.ElementIndex) is the seed's criteria
 (physics/failure.py on FemIndices' ply stresses) at every element, on any mesh and laminate."""
 import numpy as np
-import pytest
 import skfem
 from hypothesis import given, settings, strategies as st
 
