@@ -118,6 +118,12 @@ class ParticleImpactor:
             self.imp.x = self.imp.x + dt * self.imp.v
             self.time += dt
 
+    def last_positions(self) -> np.ndarray | None:
+        """(k, 3) m the candidates' positions at the last evaluation (the engine's positions
+        between its steps), None before the first: read without a call to the engine (a worker's
+        models are the orchestrator's copies, synced)."""
+        return self._x_prev
+
     def energies(self) -> dict[str, float]:
         """J: kinetic (leapfrog half-step velocity), stored penalty energy, friction loss."""
         return {"kinetic": self.imp.kinetic_energy(), "internal": self.stored, "dissipated": -self.work - self.stored}

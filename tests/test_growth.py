@@ -113,6 +113,26 @@ def test_a_zone_checked_at_every_fem_step_converts_between_samples():
     assert growth.events[0][0] <= sampled[1].events[0][0] + 1e-6 * growth.sim.dt
 
 
+@pytest.mark.parametrize("engine", ["liggghts", "yade", "lammps"])
+def test_a_check_reads_the_impactor_s_contact_without_calling_the_engine(engine):
+    """The contact reach of a check reads the candidates' positions the impactor model kept at
+    its last evaluation (ParticleImpactor.last_positions, no call to an engine's worker): they
+    are the engine's positions between steps, on every engine (LAMMPS in its worker, its models
+    synced), and some candidate touches by then."""
+    case = load_case("beam_impact_coarse", dict(GROW, **{"clock.t_end": 4e-6, "zone.half_width": 6e-3}))
+    sim = case.scene.build(case.parameters, "coupled", engine)
+    try:
+        run_clock(sim)
+        growth = case.scene.growth
+        if sim.sync is not None:
+            sim.sync()
+        for m in growth.built.impactors.values():
+            assert np.array_equal(m.last_positions(), growth.built.backend.positions_of(m.ids))
+        assert growth.contact_reach() >= 0.0
+    finally:
+        case.scene.growth.sim.close()
+
+
 def _resumed_as_straight(tmp_path, name: str, sets: dict, dem: str, at: float):
     """A run that checkpoints once, at the fraction ``at`` of its steps, after its zone grew, and
     the run resumed from that checkpoint in a new model (the first zone's, rebuilt to the

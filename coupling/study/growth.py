@@ -221,8 +221,10 @@ class Growth:
         for m in self.built.impactors.values():
             if m.imp.shape in ("sphere", "cylinder", "rod"):
                 axis = np.zeros(3) if m.imp.axis is None else np.asarray(m.imp.axis, float)  # (a cylinder's)
-                reach = max(reach, touched_reach(self.built.backend.positions_of(m.ids), np.asarray(m.imp.x, float),
-                                                 axis, float(m.imp.radius), 2 if self.plane else 1))
+                x = m.last_positions()  # (the engine's, kept by the model: no call to a worker)
+                x = self.built.backend.positions_of(m.ids) if x is None else x
+                reach = max(reach, touched_reach(x, np.asarray(m.imp.x, float), axis, float(m.imp.radius),
+                                                 2 if self.plane else 1))
         return reach
 
     def _reaches(self, built) -> list:
