@@ -326,8 +326,8 @@ SECTIONS: dict[str, dict[str, Param]] = {
                             "and also every this many clock steps; 0: at the samples only (a check between samples evaluates the "
                             "far field's failure indices in one compiled pass and reads the contact and the zone's damage; "
                             "a conversion it asks for comes at the next step, with the whole snapshot. Checked every step, "
-                            "the coarse beam ran 1.02-1.06 x slower on LIGGGHTS and YADE, 1.27 x on LAMMPS, whose worker "
-                            "is called at each check: benchmarks/growth_check.py)", kind="int", low=0),
+                            "the coarse beam ran 1.04-1.05 x slower on LIGGGHTS and YADE, 1.05-1.15 x on LAMMPS, whose "
+                            "worker is called at each check: benchmarks/growth_check.py)", kind="int", low=0),
         "conversion": Param("rebuild", "how a grown zone's new particles enter the engine: rebuild (the engine is "
                             "built again with the grown zone's particles at each conversion) or release (beams, 2D and 3D: "
                             "every particle out to grow_to is in the engine from the start, slaved to the FEM, and "
