@@ -36,12 +36,13 @@ def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool,
                                            "parameters": case.parameters})
     t_start = time.perf_counter()
     os.environ["FEMDEM_SCRATCH_DIR"] = str(writer.dir / SCRATCH)  # engines' files stay in the run
-    sim, result, qoi, checks = None, None, {}, {}
+    sim, result, qoi, checks, printed = None, None, {}, {}, 0
     status, message = "ok", ""
     try:
         sim = scene.build(case.parameters, mode, dem)
         for line in sim.warnings:
             print(f"femdem: warning: {line}", file=sys.stderr)
+        printed = len(sim.warnings)  # (the run's own warnings are printed at its end)
         if case.parameters["output.checkpoint_every"] and sim.checkpoint is None:
             raise CaseError(f"output.checkpoint_every = {case.parameters['output.checkpoint_every']}: this run cannot "
                             f"checkpoint ({_why_no_checkpoint(sim, dem)}); allowed: 0 (a killed run then resumes "
@@ -66,6 +67,9 @@ def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool,
         sim = result.pop("simulation", sim)  # a grown zone's model, if the zone grew
         if status == "ok":
             qoi, checks = scene.evaluate(case.parameters, result["history"], mode)
+            if hasattr(scene, "run_warnings"):
+                sim.warnings += [w for w in scene.run_warnings(case.parameters, result["history"], qoi, mode)
+                                 if w not in sim.warnings]
             if sim.growth is not None and "zone_conversions" not in qoi:  # a specimen's growing window
                 qoi.update(sim.growth.qoi())
                 result["history"].update(sim.growth.history())
@@ -91,6 +95,8 @@ def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool,
     finally:
         if sim is not None:
             sim.close()
+            for line in sim.warnings[printed:]:  # (a growing zone's, the far field's left-out damage)
+                print(f"femdem: warning: {line}", file=sys.stderr)
         os.environ.pop("FEMDEM_SCRATCH_DIR", None)
     result = result or {"history": {}, "timing_s": {}, "energy": {}, "steps": 0}
     summary = {

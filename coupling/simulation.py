@@ -166,7 +166,9 @@ def run_clock(sim: Simulation, on_sample: Callable[[int, float], None] | None = 
             sim = sim.growth.rebuild(saved["loop"]["growth"], sim)
         sim.restore(saved["simulation"], Path(resume_from))  # the engine's files are in the same directory
         loop = saved["loop"]
-        hist = {k: list(np.asarray(loop["history"][k]).tolist()) for k in names}
+        samples = len(np.asarray(loop["history"]["time"]))  # (a series the checkpoint's code did not record: nan)
+        hist = {k: list(np.asarray(loop["history"][k]).tolist()) if k in loop["history"] else [math.nan] * samples
+                for k in names}
         e0 = {k: float(v) for k, v in loop["e0"].items()}
         taken = {k: np.asarray(v) for k, v in loop.get("snapshots", {}).items()}
         first = int(loop["step"]) + 1

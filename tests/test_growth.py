@@ -133,6 +133,33 @@ def test_a_check_reads_the_impactor_s_contact_without_calling_the_engine(engine)
         case.scene.growth.sim.close()
 
 
+def test_damage_the_far_field_cannot_take_is_reported(femdem, tmp_path):
+    """The coarse beam struck at 12 m/s, grown from 0.9 mm, to 120 us: the far field is meshed
+    at the particle spacing out to grow_to, and near the clamp (x 19-24 mm, beyond grow_to =
+    20 mm) its 90 plies reach Hoffman's index 1 where the all-DEM beam's 90 plies crack (at 20.3,
+    22.1 and 23.6 mm by 0.6 ms, docs/benchmarks.md session 38). The run says so in one warning
+    line, printed and in the summary, naming where (the x of the history's peak) and when (the
+    first sample at 1); the qoi hold the peak and its place. A run whose far field stays below 1
+    (the hand-drawn 12 mm zone fixed, same impact, its far field graded) says nothing of it."""
+    sets = ["--set=zone.grow=true", "--set=zone.half_width=0.9e-3", "--set=impactors.cylinder.velocity=12",
+            "--set=clock.t_end=1.2e-4"]
+    code, s, err = femdem("run", "beam_impact_coarse", *sets)
+    assert code == 0, err
+    q = s["qoi"]
+    lines = [w for w in s["warnings"] if w.startswith("the far field's Hoffman ply index reached 1")]
+    assert q["peak_far_field_hoffman"] >= 1.0 and len(lines) == 1, s["warnings"]
+    assert f"{q['peak_far_field_hoffman']:.2f} at most" in lines[0]
+    assert f"x = {q['x_of_peak_far_field_hoffman'] * 1e3:.3g} mm" in lines[0]
+    assert 0.019 < q["x_of_peak_far_field_hoffman"] < 0.025  # near the clamp, beyond grow_to
+    assert f"femdem: warning: {lines[0]}" in err
+    with h5py.File(tmp_path / "run0" / "history.h5") as h:
+        t, index = h["history"]["time"][:], h["history"]["far_field_hoffman"][:]
+    assert f"t = {t[np.argmax(index >= 1.0)]:.3g} s" in lines[0]
+    code, s, err = femdem("run", "beam_impact_coarse", "--set=impactors.cylinder.velocity=12", "--set=clock.t_end=1.2e-4")
+    assert code == 0, err
+    assert s["qoi"]["peak_far_field_hoffman"] < 1.0 and not any("far field's" in w for w in s["warnings"])
+
+
 def _resumed_as_straight(tmp_path, name: str, sets: dict, dem: str, at: float):
     """A run that checkpoints once, at the fraction ``at`` of its steps, after its zone grew, and
     the run resumed from that checkpoint in a new model (the first zone's, rebuilt to the

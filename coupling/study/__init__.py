@@ -327,6 +327,14 @@ class Study:
             qoi["model_size_vs_reference"] = qoi["model_size"] / self.reference_elements
         return qoi, closed_forms.evaluate(self, p, qoi, history)
 
+    def run_warnings(self, p: dict, history: dict, qoi: dict, mode: str) -> list[str]:
+        """What a finished run should say beside its qoi: in coupled mode, a far_field_failure
+        probe whose index reached 1 (damage the FEM cannot take: probes.left_out)."""
+        if mode != "coupled":
+            return []
+        return [line for name, kind in self.layout.names["probes"].items() if kind == "far_field_failure"
+                for line in probes.left_out(name, history, qoi)]
+
     def plot(self, p: dict, history: dict, qoi: dict, plots_dir):
         from . import plots
         if p["geometry.shape"] == "panel":

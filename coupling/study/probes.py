@@ -148,15 +148,46 @@ def _far_field_series(built, name, f):
     if dyn is None or built.lam is None:
         return {}
     from .fields import FemIndices
-    indices = FemIndices(dyn.region, built.lam, built.dim)
+    region = dyn.region
+    indices = FemIndices(region, built.lam, built.dim)
+    x = region.X[region.mesh.t.T][:, :, 0].mean(axis=1)  # (nel,) m each element's centroid along x
+    now: dict = {}
 
-    def largest(which: int) -> float:
-        return float(np.max(indices(dyn.region.centroid_strain_stress(dyn.state.u)[0])[which]))
+    def largest(which: int, where: bool = False) -> float:
+        if now.get("t") != dyn.state.t:  # (once per sample for the four series)
+            now.update(t=dyn.state.t, index=indices(region.centroid_strain_stress(dyn.state.u)[0]))
+        index = now["index"][which]
+        return float(x[np.argmax(index)]) if where else float(np.max(index))
 
-    series = {f"{name}_hoffman": lambda: largest(1)}
+    series = {f"{name}_hoffman": lambda: largest(1), f"{name}_hoffman_x": lambda: largest(1, True)}
     if built.node_bonds is None:
-        series[f"{name}_interlaminar"] = lambda: largest(0)
+        series.update({f"{name}_interlaminar": lambda: largest(0), f"{name}_interlaminar_x": lambda: largest(0, True)})
     return series
+
+
+def _far_field_qoi(name, f, h):
+    """peak_NAME_CRITERION and x_of_peak_NAME_CRITERION (m, the element's centroid)."""
+    out = {}
+    for c in ("hoffman", "interlaminar"):
+        if f"{name}_{c}" in h:
+            k = int(np.argmax(h[f"{name}_{c}"]))
+            out[f"peak_{name}_{c}"] = float(h[f"{name}_{c}"][k])
+            out[f"x_of_peak_{name}_{c}"] = float(h[f"{name}_{c}_x"][k])
+    return out
+
+
+def left_out(name: str, h: dict, qoi: dict) -> list[str]:
+    """Warnings for a far_field_failure probe NAME whose index reached 1 (initiation) in the
+    FEM, which cannot fail: damage a coupled model leaves out."""
+    lines = []
+    for c, what in (("hoffman", "Hoffman ply"), ("interlaminar", "Hashin interlaminar")):
+        peak = qoi.get(f"peak_{name}_{c}", 0.0)
+        if peak >= 1.0:
+            t = float(h["time"][np.argmax(np.asarray(h[f"{name}_{c}"]) >= 1.0)])
+            lines.append(f"the far field's {what} index reached 1 at t = {t:.3g} s and {peak:.2f} at most, at x = "
+                         f"{qoi[f'x_of_peak_{name}_{c}'] * 1e3:.3g} mm: damage the coupled model leaves out there (its "
+                         "FEM cannot fail); --mode dem shows it, or a zone that holds it")
+    return lines
 
 
 def first_time(time: np.ndarray, series: np.ndarray) -> float:
@@ -307,10 +338,9 @@ PROBES: dict[str, ProbeKind] = {
     "far_field_failure": ProbeKind(
         "the largest failure indices in the FEM (1 at initiation; 1 or more is damage the model leaves out): "
         "Hoffman's, and Hashin's interlaminar where the far-field plies are tied; qoi peak_NAME_hoffman "
-        "(peak_NAME_interlaminar)",
-        {}, _far_field_series,
-        _when("{name}_hoffman")(lambda name, f, h: {f"peak_{name}_{c}": float(np.max(h[f"{name}_{c}"]))
-                                                     for c in ("hoffman", "interlaminar") if f"{name}_{c}" in h})),
+        "(peak_NAME_interlaminar), and x_of_peak_NAME_hoffman (_interlaminar) where it was; in coupled mode a peak "
+        "at 1 or more warns",
+        {}, _far_field_series, _when("{name}_hoffman")(_far_field_qoi)),
     "impactor_motion": ProbeKind(
         "an impactor's velocity into the structure and its face's travel; qoi final_NAME_velocity",
         {"impactor": Param("", "the impactor (an [impactors.*] name)", kind="str")},
