@@ -152,6 +152,13 @@ def refuse_ineffective(case: Case, mode: str, dem: str | None) -> None:
                           if k in case.given and p[k] != schema[k].default):
             raise CaseError(f"{key} = {p[key]!r}: has no effect without zone.grow = true; allowed: leave it out, "
                             "or set zone.grow = true")
+        # (growth's and placement's; a plate's zone.shape = 'impactor' takes the margin too)
+        used = p.get("zone.placement") == "auto" or p.get("zone.shape") == "impactor"
+        for key in sorted(k for k in ("zone.grow_at", "zone.margin")
+                          if k in case.given and p[k] != schema[k].default and not used):
+            raise CaseError(f"{key} = {p[key]!r}: has no effect without zone.grow = true"
+                            f"{' or zone.placement = auto' if 'zone.placement' in p else ''}; allowed: leave it "
+                            "out, or set zone.grow = true")
     if "run.steps" in schema and "clock.t_end" in case.given and p["clock.t_end"]:
         raise CaseError(f"clock.t_end = {p['clock.t_end']:g}: has no effect, case {case.name} runs run.steps clock "
                         "steps; allowed: 0, or set run.steps")

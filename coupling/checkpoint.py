@@ -89,6 +89,15 @@ def step_of(ck_dir: Path) -> int:
         return int(h5["loop"]["step"][()])
 
 
+class Unusable(Exception):
+    """A checkpoint whose files cannot be read back into the run's model (damaged, or its
+    run.json edited since): bad input to a resume, not a defect."""
+
+    def __init__(self, ck_dir, exc: Exception):
+        why = " ".join(f"{type(exc).__name__}: {exc}".split())[:240]
+        super().__init__(f"the checkpoint {ck_dir} does not fit this run's model or is damaged ({why})")
+
+
 def read(ck_dir: Path) -> dict:
     with h5py.File(Path(ck_dir) / "state.h5", "r") as h5:
         return _read(h5)

@@ -88,6 +88,9 @@ def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool,
         if resume_from is None:  # never delete the checkpoint a resume came for
             writer_cleanup(writer)
         raise
+    except checkpoint.Unusable as exc:
+        raise CaseError(f"--resume {writer.dir}: {exc}; allowed: a checkpoint as its run wrote it (or the case run "
+                        "again from its start)") from None
     except Exception as exc:  # a defect or an engine failure: say so in the run directory too
         import traceback
         (writer.dir / "error.log").write_text(traceback.format_exc())

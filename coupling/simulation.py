@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import time
+import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
@@ -162,9 +163,12 @@ def run_clock(sim: Simulation, on_sample: Callable[[int, float], None] | None = 
     first = 1
     if resume_from is not None:
         saved = ck.read(resume_from)
-        if sim.growth is not None and "growth" in saved["loop"]:  # the zone as it had grown by then
-            sim = sim.growth.rebuild(saved["loop"]["growth"], sim)
-        sim.restore(saved["simulation"], Path(resume_from))  # the engine's files are in the same directory
+        try:
+            if sim.growth is not None and "growth" in saved["loop"]:  # the zone as it had grown by then
+                sim = sim.growth.rebuild(saved["loop"]["growth"], sim)
+            sim.restore(saved["simulation"], Path(resume_from))  # the engine's files are in the same directory
+        except (OSError, EOFError, KeyError, ValueError, zipfile.BadZipFile) as exc:  # (a damaged or edited run)
+            raise ck.Unusable(resume_from, exc) from None
         loop = saved["loop"]
         samples = len(np.asarray(loop["history"]["time"]))  # (a series the checkpoint's code did not record: nan)
         hist = {k: list(np.asarray(loop["history"][k]).tolist()) if k in loop["history"] else [math.nan] * samples

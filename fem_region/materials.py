@@ -92,13 +92,17 @@ def reduce(C: np.ndarray, dim: int, hypothesis: str) -> np.ndarray:
     return {"plane_strain": plane_strain, "plane_stress": plane_stress}[hypothesis](C)
 
 
+MAX_PLIES = 10_000  # (a layup is expanded ply by ply: a count of 10^12 would be a list that large)
+
+
 def parse_layup(text: str) -> list[float]:
     """'[0_6/90_4/0_6]' or '[0/90]s' or '[45/-45]2s' -> one fibre angle (deg) per ply, bottom up.
-    Counts and repeats are whole numbers >= 1; angles are finite degrees in [-180, 180]."""
+    Counts and repeats are whole numbers >= 1; angles are finite degrees in [-180, 180]; at most
+    MAX_PLIES plies in all."""
     m = re.fullmatch(r"\s*\[([^\]]+)\]\s*(\d*)\s*(s?)\s*", text)
     if not m:
         raise ValueError("expected e.g. '[0_6/90_4/0_6]', '[0/90]s' or '[45/-45]2s' (nothing after it)")
-    plies: list[float] = []
+    groups: list[tuple[float, int]] = []
     for group in m.group(1).split("/"):
         angle, sep, count = group.strip().partition("_")
         try:
@@ -107,11 +111,14 @@ def parse_layup(text: str) -> list[float]:
             raise ValueError(f"bad ply group {group.strip()!r}; allowed: ANGLE or ANGLE_COUNT, e.g. 90_4") from None
         if not -180.0 <= a <= 180.0 or n < 1:
             raise ValueError(f"bad ply group {group.strip()!r}; allowed: an angle in [-180, 180] deg and a count >= 1")
-        plies += [a] * n
+        groups.append((a, n))
     repeat = int(m.group(2) or 1)
     if repeat < 1:
         raise ValueError(f"repeat {repeat}: allowed a whole number >= 1")
-    plies *= repeat
+    total = sum(n for _, n in groups) * repeat * (2 if m.group(3) else 1)
+    if total > MAX_PLIES:
+        raise ValueError(f"{total} plies; allowed at most {MAX_PLIES}")
+    plies = [a for a, n in groups for _ in range(n)] * repeat
     if m.group(3):
         plies += plies[::-1]
     return plies

@@ -151,6 +151,22 @@ def slice_ply(p: dict) -> np.ndarray:
     return materials.plane_stress(materials.orthotropic(E11, E22, E22, nu, nu, 0.4, G13, G13, E22 / 2.8))
 
 
+def _refuse_slivers(p: dict, xs: np.ndarray, d: float) -> None:
+    """CaseError when two of the mesh's x lines (m) fall closer than a quarter of the particle
+    spacing d: the window's ends, the crack tip and the supports and load lines each take a
+    line, and two that nearly meet leave an element whose stable step stops the run (enf_coarse
+    with its window ending 0.1 um past the load line: dt 1e-11 s, 2e8 steps)."""
+    gaps = np.diff(xs)
+    k = int(np.argmin(gaps))
+    if gaps[k] >= 0.25 * d:
+        return
+    key = next((k for k in ("dem.window_start", "dem.window_end", "zone.margin") if p.get(k)), "geometry.crack_length")
+    raise CaseError(f"{key} = {p[key]:g}: the specimen's mesh would have lines at x = {xs[k]:.6g} and {xs[k + 1]:.6g} m "
+                    f"({gaps[k]:.2g} m apart: the window's ends, the crack tip, the supports and load lines each "
+                    f"take one), an element whose stable step would stop the run; allowed: a {key} that keeps "
+                    f"them at least a quarter particle spacing ({0.25 * d:.3g} m) apart")
+
+
 def build_specimen(p: dict, a0: float, x_a: float, x_b: float, omega_arm: float,
                    stations: tuple[float, ...] = (), reserve: tuple[float, float, float] | None = None) -> Specimen:
     """Mesh, DEM window [x_a, x_b] (rounded to whole spacings), law bonds debonded for x < a0;
@@ -201,6 +217,7 @@ def build_specimen(p: dict, a0: float, x_a: float, x_b: float, omega_arm: float,
         breaks = np.unique(np.concatenate([[0.0, x_e, x0, x1, L], inner]))
         xs = np.unique(np.concatenate([grid, inner] + [line(a, b) for a, b in zip(breaks[:-1], breaks[1:])
                                                        if not (x0 - 1e-9 * L < a and b < x1 + 1e-9 * L)]))
+    _refuse_slivers(p, xs, d)
     nt = p["mesh.elements_through"]
     ys = np.unique(np.concatenate([np.linspace(0, h - band, nt + 1), [h], np.linspace(h + band, 2 * h, nt + 1)]))
     m = mesh.cut_rectangle(xs, ys, lambda cx, cy: not (x_e - tol < cx < x_b + tol and abs(cy - h) < band),

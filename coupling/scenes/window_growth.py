@@ -145,7 +145,7 @@ def growing(p: dict, dem: str, placed: float, model, load_lines: tuple[float, ..
     window_start(p, placed, x0)  # (refused before a0, or too close to the first end)
     limit = x0 + np.floor((L - 4 * h - x0) / e + 1e-9) * e
     if limit < x0:
-        key = "dem.window_end" if p["dem.window_end"] else "zone.margin"
+        key = "dem.window_end" if p["dem.window_end"] else "dem.window_start" if p["dem.window_start"] else "zone.margin"
         raise CaseError(f"{key} = {p[key]:g}: the growing window would start at x = {x0:.4g} m, beyond "
                         f"geometry.length - 4 h = {L - 4 * h:.4g} m; allowed: a smaller {key}, or a longer specimen")
     reserve = (x0, float(limit), e)

@@ -206,8 +206,8 @@ def beam(study, p: dict, mode: str, dem: str, start=None):
         return _fem_beam(study, p, built, t_end), built
     w = L if mode == "dem" else p["zone.half_width"]
     if mode == "coupled" and not 2 * t < w < 0.8 * L:
-        raise CaseError(f"zone.half_width = {w:g}: allowed between two particle sizes ({2 * t:g} m) and 0.8 x "
-                        "half the span")
+        raise CaseError(f"zone.half_width = {w:g}: allowed more than two particle sizes ({2 * t:g} m) and less "
+                        f"than 0.8 x half the span ({0.8 * L:g} m)")
     if mode == "coupled" and p.get("zone.grow"):
         xg = grow_limit(p, built)
         check_growth(p, t, w, xg, xg < 0.8 * L, f"below 0.8 x half the span ({0.8 * L:g} m)")
