@@ -59,6 +59,8 @@ def _same_run(dem: str, name: str = "beam_impact_coarse", sets: dict = GROW, unt
     for key, a in rebuilt.items():
         a, b = np.asarray(a, float), np.asarray(released[key], float)
         assert a.shape == b.shape, key
+        if key.endswith(("_hoffman_x", "_interlaminar_x")):  # where a field's largest index is: two elements
+            continue  # a hair apart swap it (compared through the index series itself)
         if a.ndim and len(a) == len(early):
             # (a momentum component is to scale with the momentum, an energy with the ledger's:
             # the 3D strip's y momentum and a slow impact's dissipation are round-off; the
