@@ -153,9 +153,9 @@ def refuse_ineffective(case: Case, mode: str, dem: str | None) -> None:
             raise CaseError(f"{key} = {p[key]!r}: has no effect without zone.grow = true; allowed: leave it out, "
                             "or set zone.grow = true")
         # (growth's and placement's; a plate's zone.shape = 'impactor' takes the margin too)
-        used = p.get("zone.placement") == "auto" or p.get("zone.shape") == "impactor"
-        for key in sorted(k for k in ("zone.grow_at", "zone.margin")
-                          if k in case.given and p[k] != schema[k].default and not used):
+        auto = p.get("zone.placement") == "auto"
+        used = {"zone.grow_at": auto, "zone.margin": auto or p.get("zone.shape") == "impactor"}
+        for key in sorted(k for k in used if k in case.given and p[k] != schema[k].default and not used[k]):
             raise CaseError(f"{key} = {p[key]!r}: has no effect without zone.grow = true"
                             f"{' or zone.placement = auto' if 'zone.placement' in p else ''}; allowed: leave it "
                             "out, or set zone.grow = true")

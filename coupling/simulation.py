@@ -122,9 +122,11 @@ class Simulation:
     # what the scene could model only with a compromise, or not as well as its checks assume:
     # one line each, printed before the run and kept in summary.json
     warnings: list[str] = field(default_factory=list)
-    # a zone that grows during the run (coupling/study/growth.py): called after each sample,
-    # returns the Simulation the run continues with (its state carried over) or None; its
-    # state() goes into checkpoints, and rebuild(state) makes the Simulation a resume restores
+    # a zone that grows during the run (coupling/study/growth.py): called after each sample, at
+    # each check (every growth.every steps) and at the step a check asked to convert at
+    # (growth.pending); returns the Simulation the run continues with (its state carried over)
+    # or None; its state() goes into checkpoints, and rebuild(state) makes the Simulation a
+    # resume restores
     growth: object = None
 
 
@@ -168,6 +170,9 @@ def run_clock(sim: Simulation, on_sample: Callable[[int, float], None] | None = 
                 sim = sim.growth.rebuild(saved["loop"]["growth"], sim)
             sim.restore(saved["simulation"], Path(resume_from))  # the engine's files are in the same directory
         except (OSError, EOFError, KeyError, ValueError, zipfile.BadZipFile) as exc:  # (a damaged or edited run)
+            from dem_region.backends.base import EngineUnavailable
+            if isinstance(exc, EngineUnavailable):  # (an engine that cannot start: not the checkpoint's)
+                raise
             raise ck.Unusable(resume_from, exc) from None
         loop = saved["loop"]
         samples = len(np.asarray(loop["history"]["time"]))  # (a series the checkpoint's code did not record: nan)

@@ -401,10 +401,13 @@ def element_failure_index(u, edofs, L, c, hoffman_on, Z0, R0, hashin_on, out):
         if hoffman_on[e]:
             h = (q23 * (s2 - s3) ** 2 + q31 * (s3 - s1) ** 2 + q12 * (s1 - s2) ** 2
                  + l1 * s1 + l2 * s2 + l3 * s3 + (t23 / S23) ** 2 + (t13 / S13) ** 2 + (t12 / S12) ** 2)
-            best = max(best, h)
-        if hashin_on[e]:
-            n = max(s3, 0.0)
-            best = max(best, (n / Z0) ** 2 + (t13 ** 2 + t23 ** 2) / R0 ** 2)
+            if not h <= best:  # (a nan kept, as numpy's maximum keeps it)
+                best = h
+        if hashin_on[e] and best == best:
+            n = s3 if s3 > 0.0 or s3 != s3 else 0.0  # max(s3, 0), a nan kept
+            g = (n / Z0) ** 2 + (t13 ** 2 + t23 ** 2) / R0 ** 2
+            if not g <= best:
+                best = g
         out[e] = best
 
 
@@ -442,7 +445,7 @@ def cohesive_reach(traction, normal, damage, x, Z0, R0, at):
     failed (the cohesive zone and what is about to join it); -1 if none."""
     out = -1.0
     for b in range(damage.shape[0]):
-        if damage[b] >= 1.0:  # (the crack's faces in contact: not a process zone)
+        if not damage[b] < 1.0:  # (the crack's faces in contact: not a process zone; a nan: neither)
             continue
         tn = traction[b, 0] * normal[b, 0] + traction[b, 1] * normal[b, 1] + traction[b, 2] * normal[b, 2]
         s0, s1, s2 = (traction[b, 0] - tn * normal[b, 0], traction[b, 1] - tn * normal[b, 1],
@@ -461,7 +464,7 @@ def flagged_reach(index, order, x0, x1, at, start, margin):
     r = start
     for k in range(order.shape[0]):
         e = order[k]
-        if index[e] < at:
+        if not index[e] >= at:  # (a nan flags nothing, as numpy's >= did)
             continue
         if x0[e] > r + margin:
             break

@@ -42,9 +42,32 @@ def test_the_compiled_index_is_the_seed_criteria_at_every_element(name, angles, 
     np.testing.assert_allclose(got, expect, rtol=1e-10, atol=1e-12 * np.abs(expect).max())
 
 
+def test_per_element_switches_and_a_nan():
+    """Each criterion only where its switch is on, element by element (a bonded beam's Hashin on
+    its bottom row; a mask drawn at random here, for both criteria); a nan displacement gives a
+    nan index on the elements it touches, as numpy's maximum does, and nothing elsewhere."""
+    e = ELEMENTS["quad4"]
+    m = skfem.MeshQuad.init_tensor(np.linspace(0, 2e-3, 6), np.linspace(0, 1e-3, 4))
+    lam = _laminate([0.0, 90.0], elastic=False)
+    region = FemRegion(m, e, lam.D(0.0), 1500.0, 1.0)
+    fi = FemIndices(region, lam, 2)
+    rng = np.random.default_rng(7)
+    hoff_on, hashin_on = rng.random(region.n_elements) < 0.5, rng.random(region.n_elements) < 0.5
+    u = 2e-5 * rng.standard_normal(region.X.shape)
+    hashin, hoffman = fi(region.centroid_strain_stress(u)[0])
+    index = ElementIndex(region, fi.ply_stress, hoff_on, hashin_on, fi.k, fi.Z0, fi.R0)
+    expect = np.maximum(np.where(hoff_on, hoffman, 0.0), np.where(hashin_on, hashin, 0.0))
+    np.testing.assert_allclose(index(u), expect, rtol=1e-10, atol=1e-300)
+    assert np.any(hoff_on & (hoffman > hashin) & (index(u) > 0)) and np.any(~hoff_on & hashin_on)
+    u[5, 1] = np.nan
+    touched = np.any(region.mesh.t.T == 5, axis=1) & (hoff_on | hashin_on)
+    got = index(u)
+    assert np.all(np.isnan(got[touched])) and not np.any(np.isnan(got[~touched]))
+
+
 def test_per_element_switches_and_elastic_plies():
-    """Hashin only where hashin_on (a bonded beam's bottom row), Hoffman off the elements where
-    hoffman_on is False; infinite strengths (elastic plies) give a Hoffman index of 0."""
+    """Hashin only where hashin_on (a bonded beam's bottom row); infinite strengths (elastic
+    plies) give a Hoffman index of 0."""
     e = ELEMENTS["quad4"]
     m = skfem.MeshQuad.init_tensor(np.linspace(0, 2e-3, 5), np.linspace(0, 1e-3, 3))
     lam = _laminate([0.0, 90.0], elastic=True)
@@ -83,7 +106,7 @@ def test_the_compiled_reaches_are_their_numpy_forms(seed, n, at):
     (coupling/study/growth.py and scenes/window_growth.py until session 38): the farthest
     damaged bond, the farthest particle inside a sphere or a cylinder, the farthest crack-plane
     bond in or about to join the cohesive zone."""
-    from physics.kernels import cohesive_reach, damaged_reach, touched_reach
+    from physics.kernels import cohesive_reach, damaged_reach, flagged_reach, touched_reach
     rng = np.random.default_rng(seed)
     reach, damage = rng.random(n), np.where(rng.random(n) < 0.3, rng.random(n), 0.0)
     assert damaged_reach(reach, damage) == (reach[damage > 0].max() if np.any(damage > 0) else -1.0)
@@ -108,6 +131,11 @@ def test_the_compiled_reaches_are_their_numpy_forms(seed, n, at):
     got = cohesive_reach(t, normal, damage, xb, Z0, R0, at)
     if not near.any():
         assert got == (xb[chosen].max() if chosen.any() else -1.0)
+    if n >= 2:  # a nan damage or traction flags nothing, as numpy's comparisons did
+        damage[0], t[1] = np.nan, np.nan
+        assert cohesive_reach(t, normal, damage, xb, Z0, R0, at) <= got
+        index = np.full(n, np.nan)
+        assert flagged_reach(index, np.arange(n), xb, xb + 1.0, at, 0.0, 10.0) == 0.0
 
 
 @given(seed=st.integers(0, 2**31), n=st.integers(0, 50), at=st.floats(0.1, 1.0), start=st.floats(0.0, 0.5),

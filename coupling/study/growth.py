@@ -1,8 +1,8 @@
 """A damage zone that grows during the run (``zone.grow = true``; the beams and the bonded
 beams, 2D and 3D, the plates' box zones and the discs' squares).
 
-At each history sample the far field's failure indices are evaluated on the FEM's
-displacement at that FEM step: Hoffman's ply index when the zone's plies fail, and Hashin's
+At each history sample (and every ``zone.grow_every`` FEM steps) the far field's failure
+indices are evaluated on the FEM's displacement at that FEM step: Hoffman's ply index when the zone's plies fail, and Hashin's
 interlaminar index when the far-field plies are tied (a cohesive far field delaminates by
 itself), the indices placement uses (study/placement.py); a bonded beam's body by Hoffman and
 its adhesive by Hashin's index on the bottom element row (fields.BondedIndices). When an element that begins within
@@ -11,6 +11,9 @@ its adhesive by Hashin's index on the bottom element row (fields.BondedIndices).
 over them and the margin, in whole particle spacings, up to ``zone.grow_to`` (a plate's box:
 the distance from the centre is max(|x|, |y|), so the square grows over them): the coupled
 model of the grown zone is built, continues from the current state, and the old one is closed.
+A check between samples holds only the FEM's state (the clock's u_snapshot): a conversion it
+asks for is made at the next FEM step, where the clock takes its whole snapshot (the energies
+and the momentum the conversion books; ``pending``, kept in checkpoints).
 The margin (0: the laminate's thickness, a bonded beam's depth, or four particle sizes) is
 placement's.
 
@@ -212,7 +215,7 @@ class Growth:
             raise error(f"zone.grow = true: the zone grown to {half_width * 1e3:.4g} mm cannot be modelled "
                         f"({exc})") from None
 
-    # -- at each sample -------------------------------------------------------------------------
+    # -- at each sample and check -----------------------------------------------------------------
     def contact_reach(self) -> float:
         """m: the farthest particle an impactor touches (its patch: 0 while it touches the
         symmetry plane's column alone), -1 without contact; a flat-faced rod's patch is its face
@@ -245,9 +248,10 @@ class Growth:
 
     def __call__(self, step: int):
         """The Simulation of the grown zone if the far field, the contact or the zone's own damage
-        asks for it at this sample, else None: an element within the margin of the zone's edge
-        at grow_at, or a contact patch or damage the far field cannot carry on closer than the
-        margin to the edge."""
+        asks for it at this sample or check, else None: an element within the margin of the
+        zone's edge at grow_at, or a contact patch or damage the far field cannot carry on closer
+        than the margin to the edge. At a check that holds only the FEM's state, a conversion
+        asked for is deferred to the next step (None now, ``pending`` set)."""
         clock = self.built.clock
         self.pending = -1
         index = self.index(clock.u_snapshot)
@@ -286,7 +290,8 @@ class Growth:
         sim, built = self._assemble(half_width, transfer, error=RuntimeError)
         old_sim.close = lambda: self.sim.close()  # whoever holds the first model closes the current one
         self.engine_start, self.step0 = transfer.engine_start, step
-        sim.warnings = old_sim.warnings + [w for w in sim.warnings if w not in old_sim.warnings]
+        old_sim.warnings.extend(w for w in sim.warnings if w not in old_sim.warnings)
+        sim.warnings = old_sim.warnings  # (one list: the first model's, which the run's caller holds)
         self.half_width = float(built.lattice.x[:, 0].max())
         self._bind(sim, built)
         clock = built.clock
