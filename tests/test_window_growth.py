@@ -339,6 +339,7 @@ def test_a_bending_window_follows_the_crack_anywhere_in_its_ranges(femdem, case,
     _follows(femdem, case, bending_sets(m, h, L_rel, a_rel, substeps, r, pace, overhang, deflection))
 
 
+@pytest.mark.slow  # 60-75 s (the suite's budget: 551-614 s in session 38's runs with it)
 @COARSE
 @given(m=MATERIAL, h=THICK, L_rel=st.floats(1.2, 2.0), a_rel=st.floats(0.4, 0.6), substeps=st.sampled_from([0, 1, 2]),
        r=SUITE_RADIUS, **BENDING_LOAD)
