@@ -181,6 +181,8 @@ class WindowGrowth(Growth):
         self._band = (np.abs(c[:, 1] - h) < built.t) & (c[:, 0] > x_b)  # the intact band ahead of the window
         self._strengths = Z0, R0 = dl.resolved_strengths(self.p, built.t)
         self._index = ElementIndex(region, self._plane_stress(region), False, self._band, None, Z0, R0)
+        bonds = built.inter  # (x of each crack-plane bond's first particle: contact_reach)
+        self._bond_x = np.ascontiguousarray(bonds.X[bonds.pairs[:, 0], 0], float)
 
     @staticmethod
     def _plane_stress(region):
@@ -208,9 +210,7 @@ class WindowGrowth(Growth):
         return cohesive_reach(bonds.traction, bonds.normal, bonds.damage, self._bond_x, Z0, R0, self.grow_at)
 
     def _reaches(self, built) -> list:
-        bonds = built.inter  # (x of each crack-plane bond's first particle: contact_reach)
-        self._bond_x = np.ascontiguousarray(bonds.X[bonds.pairs[:, 0], 0], float)
-        return []
+        return []  # (damage_reach reads none: the crack-plane bonds are contact_reach's)
 
     def damage_reach(self) -> float:
         """-1: the window's crack-plane bonds are contact_reach's (their damage is the crack the
