@@ -154,3 +154,21 @@ def test_the_compiled_flagged_reach_is_placement_s(seed, n, at, start, margin):
     flagged = index >= at
     expect = grown_reach(x0[flagged], x1[flagged], start, margin)
     assert flagged_reach(index, np.argsort(x0, kind="stable"), x0, x1, at, start, margin) == expect
+
+
+def test_the_left_out_damage_warning_says_where_only_when_it_knows():
+    """probes.left_out: one line per criterion whose peak reached 1, with the first sample's time
+    at 1 and the peak's place; no place when the history does not hold it (a peak taken before a
+    resume from a checkpoint written without the place series), none below 1."""
+    from coupling.study.probes import left_out
+    h = {"time": np.array([0.0, 1e-5, 2e-5, 3e-5]), "ff_hoffman": np.array([0.2, 0.9, 1.3, 1.1]),
+         "ff_interlaminar": np.array([0.1, 0.2, 0.3, 0.2])}
+    qoi = {"peak_ff_hoffman": 1.3, "x_of_peak_ff_hoffman": 0.0222, "peak_ff_interlaminar": 0.3,
+           "x_of_peak_ff_interlaminar": 0.001}
+    lines = left_out("ff", h, qoi)
+    assert len(lines) == 1 and "Hoffman" in lines[0] and "t = 2e-05 s" in lines[0] and "1.30 at most" in lines[0]
+    assert "x = 22.2 mm" in lines[0]
+    qoi["x_of_peak_ff_hoffman"] = np.nan
+    (line,) = left_out("ff", h, qoi)
+    assert "x =" not in line and "nan" not in line
+    assert left_out("ff", h, {"peak_ff_hoffman": 0.99}) == []

@@ -184,9 +184,11 @@ def left_out(name: str, h: dict, qoi: dict) -> list[str]:
         peak = qoi.get(f"peak_{name}_{c}", 0.0)
         if peak >= 1.0:
             t = float(h["time"][np.argmax(np.asarray(h[f"{name}_{c}"]) >= 1.0)])
-            lines.append(f"the far field's {what} index reached 1 at t = {t:.3g} s and {peak:.2f} at most, at x = "
-                         f"{qoi[f'x_of_peak_{name}_{c}'] * 1e3:.3g} mm: damage the coupled model leaves out there (its "
-                         "FEM cannot fail); --mode dem shows it, or a zone that holds it")
+            x = qoi.get(f"x_of_peak_{name}_{c}", np.nan)  # (nan: a peak before a resume from an older checkpoint)
+            where = f", at x = {x * 1e3:.3g} mm" if np.isfinite(x) else ""
+            lines.append(f"the far field's {what} index reached 1 at t = {t:.3g} s and {peak:.2f} at most{where}: "
+                         "damage the coupled model leaves out there (its FEM cannot fail); --mode dem shows it, or a "
+                         "zone that holds it")
     return lines
 
 
