@@ -142,9 +142,10 @@ def test_the_compiled_reaches_are_their_numpy_forms(seed, n, at):
        margin=st.floats(0.0, 0.3))
 @settings(max_examples=60, deadline=None)
 def test_the_compiled_flagged_reach_is_placement_s(seed, n, at, start, margin):
-    """Growth's reach over the flagged elements (physics/kernels.flagged_reach, the elements
-    sorted once) against placement.grown_reach over the flagged ones, on elements that overlap,
-    touch and leave gaps (x0 on a coarse grid, so that ties occur)."""
+    """Growth's reach over the elements its index flags (physics/kernels.flagged_reach, the
+    elements sorted once) against placement.grown_reach over the flagged ones alone (the same
+    rule, held to its fixed point in tests/test_placement.py), on elements that overlap, touch
+    and leave gaps (x0 on a coarse grid, so that ties occur)."""
     from coupling.study.placement import grown_reach
     from physics.kernels import flagged_reach
     rng = np.random.default_rng(seed)

@@ -47,13 +47,10 @@ class Placement:
 def grown_reach(x0: np.ndarray, x1: np.ndarray, start: float, margin: float) -> float:
     """Reach (m) of the zone from x = 0: ``start`` grown over every element [x0, x1] (m, (n,)
     each, the flagged ones) that begins within ``margin`` of the reach so far."""
-    order = np.argsort(x0)
-    r = start
-    for lo, hi in zip(x0[order], x1[order]):  # once at set-up, over the flagged elements
-        if lo > r + margin:
-            break
-        r = max(r, hi)
-    return r
+    from physics.kernels import flagged_reach  # (the growth's checks run the same rule over an index)
+    x0, x1 = np.ascontiguousarray(x0, float), np.ascontiguousarray(x1, float)
+    return float(flagged_reach(np.ones(len(x0)), np.argsort(x0, kind="stable"), x0, x1, 1.0, float(start),
+                               float(margin)))
 
 
 @dataclass
