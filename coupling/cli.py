@@ -154,29 +154,27 @@ def _run(args) -> int:
             raise CaseError(f"--resume {args.resume}: {ignored[0]} would be ignored (a resumed run keeps its case, "
                             "engine, mode, parameters and directory); allowed: --resume DIR [--quiet]")
         code, out, summary = resume(args.resume, args.quiet)
-        if not args.quiet or code:
-            _report(summary, out)
-        return code
-    if not args.case:
-        raise CaseError("CASE: missing; allowed: a bundled case name, a .toml path, or --resume DIR")
-    if args.dem is not None and args.dem not in ENGINES:
-        raise CaseError(f"--dem {args.dem}: allowed {', '.join(ENGINES)}")
-    case = load_case(args.case, parse_set(args.set))
-    mode = case.scene.MODES[0] if args.mode is None else args.mode
-    if mode not in MODES:
-        raise CaseError(f"--mode {mode}: allowed {', '.join(MODES)}")
-    refuse_ineffective(case, mode, args.dem)
-    code, out, summary = execute(case, mode, args.dem or DEFAULT_ENGINE, args.out, args.quiet)
-    if not args.quiet or code:
-        _report(summary, out)
+    else:
+        if not args.case:
+            raise CaseError("CASE: missing; allowed: a bundled case name, a .toml path, or --resume DIR")
+        if args.dem is not None and args.dem not in ENGINES:
+            raise CaseError(f"--dem {args.dem}: allowed {', '.join(ENGINES)}")
+        case = load_case(args.case, parse_set(args.set))
+        mode = case.scene.MODES[0] if args.mode is None else args.mode
+        if mode not in MODES:
+            raise CaseError(f"--mode {mode}: allowed {', '.join(MODES)}")
+        refuse_ineffective(case, mode, args.dem)
+        code, out, summary = execute(case, mode, args.dem or DEFAULT_ENGINE, args.out, args.quiet)
+    if not args.quiet or code:  # a run that failed reports on stderr, where its caller looks
+        _report(summary, out, sys.stderr if code else sys.stdout)
     return code
 
 
-def _report(s: dict, out) -> None:
+def _report(s: dict, out, file) -> None:
     print(f"{s['case']} ({s['mode']}{', ' + s['dem_backend'] if s['dem_backend'] else ''}): "
-          f"{s['status']} in {s['timing_s']['total']:.2f} s, {s['clock']['steps']} steps")
+          f"{s['status']} in {s['timing_s']['total']:.2f} s, {s['clock']['steps']} steps", file=file)
     if s["message"]:
-        print(f"  {s['message']}")
+        print(f"  {s['message']}", file=file)
     for name, c in s["checks"].items():
         ref = c["reference"]
         ranged = isinstance(ref, list)
@@ -185,11 +183,11 @@ def _report(s: dict, out) -> None:
         value = "n/a" if c["value"] is None else f"{c['value']:.6g}"
         ref = f"[{ref[0]:.6g}, {ref[1]:.6g}]" if ranged else f"{ref:.6g}"
         print(f"  check {name}: {value} vs {ref} ({err}, "
-              f"{'PASS' if c['passed'] else 'FAIL'}; {c['source']})")
-    print(f"  results: {out}/summary.json")
+              f"{'PASS' if c['passed'] else 'FAIL'}; {c['source']})", file=file)
+    print(f"  results: {out}/summary.json", file=file)
     plots = sorted((out / "plots").glob("*.png"))
     if plots:
-        print(f"  plot:    {plots[0]}")
+        print(f"  plot:    {plots[0]}", file=file)
 
 
 if __name__ == "__main__":

@@ -267,10 +267,11 @@ def test_stiff_penalty_tie_subcycled_does_not_resonate(femdem):
 
 def test_energy_guard_stops_a_subcycled_run_with_a_diagnostic(femdem):
     """The guard, the last line of defence: a subcycled run whose energy balance leaves its
-    tolerance stops with exit code 3, says why and what to try, and still publishes its run
-    directory with status 'unstable'."""
+    tolerance stops with exit code 3, says why and what to try (on stderr, where a caller
+    looks), and still publishes its run directory with status 'unstable'."""
     code, s, err = femdem("run", "chain_consistency", "--set", "clock.substeps=4", "--set", "guards.energy_growth=1e-9")
     assert code == 3 and s["status"] == "unstable"
+    assert s["message"] in err and "unstable" in err.splitlines()[0]
     assert "energy balance error" in s["message"] and "clock.substeps" in s["message"]
     assert s["clock"]["steps"] < 200  # stopped early, not after producing garbage
 

@@ -190,30 +190,45 @@ def test_runs_started_together_get_their_own_directories(tmp_path):
     assert len(dirs) == 2 and all("liggghts" in d.name and (d / "summary.json").exists() for d in dirs), dirs
 
 
-def test_a_damaged_checkpoint_is_refused_and_left_to_resume(tmp_path):
-    """A checkpoint whose engine file is truncated, or lacks an array, or holds another
-    model's particles, cannot be restored: --resume says so in one line naming the
-    checkpoint (exit 2, it was an exit 1 with nothing on stderr) and leaves the run as it was;
-    with the file put back the run resumes and finishes."""
-    args = ["run", "beam_impact_coarse", "--dem", "liggghts", "--set", "clock.t_end=2.4e-5",
-            "--set", "output.checkpoint_every=600"]
-    proc = _femdem(tmp_path, *args, "--out", "killed", wait=False)
-    partial = tmp_path / "killed.partial"
-    engine = partial / "checkpoint" / "dem.npz"
-    assert _kill_when(proc, lambda: (partial / "checkpoint" / "state.h5").exists() and engine.exists())
+def _npz_damages(engine: Path) -> dict:
+    """LIGGGHTS' and LAMMPS' engine file (dem.npz): truncated, an array missing, another
+    model's particles."""
     good = engine.read_bytes()
     arrays = dict(np.load(engine))
     fewer = {k: v[:10] if v.ndim and len(v) == len(arrays["x"]) else v for k, v in arrays.items()}
-    damages = {"truncated": lambda: engine.write_bytes(good[: len(good) // 2]),
-               "an array missing": lambda: np.savez(engine, **{k: v for k, v in list(arrays.items())[1:]}),
-               "another model's particles": lambda: np.savez(engine, **fewer)}
-    for what, damage in damages.items():
+    return {"truncated": lambda: engine.write_bytes(good[: len(good) // 2]),
+            "an array missing": lambda: np.savez(engine, **{k: v for k, v in list(arrays.items())[1:]}),
+            "another model's particles": lambda: np.savez(engine, **fewer)}
+
+
+def _yade_damages(engine: Path) -> dict:
+    """YADE's saved scene (dem.yade.bz2): truncated, absent."""
+    good = engine.read_bytes()
+    return {"truncated": lambda: engine.write_bytes(good[: len(good) // 2]), "absent": engine.unlink}
+
+
+@pytest.mark.parametrize("dem", ["liggghts", pytest.param("lammps", marks=pytest.mark.slow),
+                                 pytest.param("yade", marks=pytest.mark.slow)])
+def test_a_damaged_checkpoint_is_refused_and_left_to_resume(tmp_path, dem):
+    """A checkpoint whose engine file is truncated, or lacks an array, or holds another
+    model's particles, cannot be restored: --resume says so in one line naming the
+    checkpoint (exit 2, it was an exit 1 with nothing on stderr; on LAMMPS' worker and YADE
+    an exit 1 that published the run as failed) and leaves the run as it was; with the file
+    put back the run resumes and finishes."""
+    args = ["run", "beam_impact_coarse", "--dem", dem, "--set", "clock.t_end=2.4e-5",
+            "--set", "output.checkpoint_every=600"]
+    proc = _femdem(tmp_path, *args, "--out", "killed", wait=False)
+    partial = tmp_path / "killed.partial"
+    engine = partial / "checkpoint" / ("dem.yade.bz2" if dem == "yade" else "dem.npz")
+    assert _kill_when(proc, lambda: (partial / "checkpoint" / "state.h5").exists() and engine.exists())
+    good = engine.read_bytes()
+    for what, damage in (_yade_damages if dem == "yade" else _npz_damages)(engine).items():
         damage()
         r = _femdem(tmp_path, "run", "--resume", "killed.partial")
         assert r.returncode == 2, (what, r.returncode, r.stdout, r.stderr)
         assert r.stderr.count("\n") == 1 and "--resume" in r.stderr and "checkpoint" in r.stderr, (what, r.stderr)
         assert partial.is_dir() and (partial / "checkpoint" / "state.h5").exists(), what
-    engine.write_bytes(good)
+        engine.write_bytes(good)
     r = _femdem(tmp_path, "run", "--resume", "killed.partial")
     assert r.returncode == 0, r.stderr
     assert json.loads((tmp_path / "killed" / "summary.json").read_text())["status"] == "ok"

@@ -494,7 +494,12 @@ class RemoteBackend:
         self._call("call", "checkpoint", str(path))
 
     def restore(self, path) -> None:
-        self._call("call", "restore", str(path))
+        """A file the worker, alive, cannot restore from is a ValueError: a checkpoint that
+        does not fit (a worker that died is EngineUnavailable)."""
+        try:
+            self._call("call", "restore", str(path))
+        except RuntimeError as exc:
+            raise ValueError(str(exc)) from None
 
     def finalize(self) -> None:
         if self.proc.poll() is None and not self._stuck:

@@ -332,8 +332,16 @@ class YadeBackend:
         forces): the continuation is bit-identical. Without them (a checkpoint written before
         they were kept, or forces of another iteration) the forces are recomputed at its
         positions by a step of zero length, without the hook's: a coupled beam resumed so
-        moved first without its impactor and law bonds, 4 % off in momentum."""
-        self.O.load(str(path))
+        moved first without its impactor and law bonds, 4 % off in momentum. A file YADE
+        cannot read, or one of another model (another body count), is a ValueError: a
+        checkpoint that does not fit, not an engine failure."""
+        bodies = len(self.O.bodies)
+        try:
+            self.O.load(str(path))
+        except RuntimeError as exc:  # (YADE's boost archive and bzip2 errors)
+            raise ValueError(f"YADE cannot load {path}: {exc}") from None
+        if len(self.O.bodies) != bodies:
+            raise ValueError(f"{path} holds {len(self.O.bodies)} bodies, this model {bodies}")
         self._states = [b.state for b in self.O.bodies][: self.scene.n]
         self.law = self.O.engines[3].lawDispatcher.functors[0]
         saved = Path(str(path) + ".forces.npy")
