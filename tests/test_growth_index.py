@@ -4,7 +4,7 @@ import numpy as np
 import skfem
 from hypothesis import given, settings, strategies as st
 
-from coupling.study.fields import ElementIndex, FemIndices
+from coupling.study.fields import BondedIndices, ElementIndex, FemIndices
 from fem_region import materials
 from fem_region.elements import ELEMENTS
 from fem_region.region import FemRegion
@@ -173,3 +173,26 @@ def test_the_left_out_damage_warning_says_where_only_when_it_knows():
     (line,) = left_out("ff", h, qoi)
     assert "x =" not in line and "nan" not in line
     assert left_out("ff", h, {"peak_ff_hoffman": 0.99}) == []
+
+
+@given(case=st.sampled_from(["cfrp_beam_impact_coarse", "cfrp_beam_impact_3d_coarse"]), seed=st.integers(0, 2**31),
+       scale=st.floats(1e-7, 1e-4))
+@settings(max_examples=6, deadline=None)
+def test_a_bonded_beam_s_compiled_index_is_its_criteria(case, seed, scale):
+    """A bonded beam's growth check (study/growth.py on fields.BondedIndices): the compiled
+    criterion is the body's Hoffman index and the adhesive's Hashin index on the bottom row,
+    as BondedIndices gives them in numpy, at every element of the grown far field's mesh (2D
+    plane stress, 3D); a rough field exercises every strain component."""
+    from coupling.case import load_case
+    c = load_case(case, {"zone.grow": True})
+    sim, built = c.scene.assemble(c.parameters, "coupled", "liggghts")
+    try:
+        region = built.dyn.region
+        fi = BondedIndices(region, built.bonded, built.dim)
+        u = scale * np.random.default_rng(seed).standard_normal(region.X.shape)
+        hashin, hoffman = fi(region.centroid_strain_stress(u)[0])
+        got = ElementIndex(region, fi.ply_stress, True, fi.bottom, fi.k, fi.Z0, fi.R0)(u)
+        np.testing.assert_allclose(got, np.maximum(hashin, hoffman), rtol=1e-10, atol=1e-300)
+        assert np.any(fi.bottom) and not np.all(fi.bottom) and np.any(got[fi.bottom] > 0)
+    finally:
+        sim.close()

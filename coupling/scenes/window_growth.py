@@ -3,7 +3,7 @@ on dcb, enf and mixed_mode; coupling/study/growth.py grows the studies' zones th
 
 The window [x_a, x_b] starts at the initial crack tip a0, or a bending specimen's load line
 ahead of it, plus the lead (zone.margin, or 4 arm thicknesses: ``lead``), or at dem.window_end.
-At each history sample (and also every zone.grow_every clock steps) Hashin's interlaminar index on
+At each FEM step (zone.grow_every: 1, or every so many steps and at the history samples) Hashin's interlaminar index on
 the crack plane, (<s_n> / Z0)^2 + (t_s / R0)^2 with the strengths the particles' law
 uses, is evaluated on both sides of the window's end: on the centroid stress of the intact FEM
 band's elements ahead of it, and on the window's crack-plane bonds (their last tractions, or
@@ -40,10 +40,11 @@ PARAMETERS: dict[str, Param] = {
     "zone.grow_at": Param(0.25, "zone.grow: Hashin's interlaminar index (1 at initiation) on the crack plane, "
                           "in the FEM band ahead of the window or on its particles, that the window keeps zone.margin "
                           "ahead of", low=0.05, high=2.0),
-    "zone.grow_every": Param(0, "zone.grow: the growth is checked at each history sample (about 1000 a run, "
-                             "output.history_every) and also every this many clock steps; 0: at the samples only (a "
-                             "conversion a check between samples asks for comes at the next step; checked every step, "
-                             "dcb_coarse and enf_coarse ran 1.05-1.10 x slower on LIGGGHTS)",
+    "zone.grow_every": Param(1, "zone.grow: the growth is checked every this many clock steps (1: each FEM step) "
+                             "and at each history sample; 0: at the samples only (about 1000 a run, "
+                             "output.history_every). A conversion a check between samples asks for comes at the next "
+                             "step; checked every step, dcb_coarse and enf_coarse ran 1.05-1.10 x slower on LIGGGHTS "
+                             "than at the samples",
                              kind="int", low=0),
     "zone.margin": Param(0.0, "zone.grow: how far the window reaches beyond where the index reaches zone.grow_at; "
                          "0: 4 arm thicknesses", unit="m", low=0.0),

@@ -1,8 +1,8 @@
 """A damage zone that grows during the run (``zone.grow = true``; the beams and the bonded
 beams, 2D and 3D, the plates' box zones and the discs' squares).
 
-At each history sample (and every ``zone.grow_every`` FEM steps) the far field's failure
-indices are evaluated on the FEM's displacement at that FEM step: Hoffman's ply index when the zone's plies fail, and Hashin's
+At each FEM step (``zone.grow_every``: 1, or every so many steps and at each history sample)
+the far field's failure indices are evaluated on the FEM's displacement at that step: Hoffman's ply index when the zone's plies fail, and Hashin's
 interlaminar index when the far-field plies are tied (a cohesive far field delaminates by
 itself), the indices placement uses (study/placement.py); a bonded beam's body by Hoffman and
 its adhesive by Hashin's index on the bottom element row (fields.BondedIndices). When an element that begins within

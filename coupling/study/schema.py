@@ -318,16 +318,17 @@ SECTIONS: dict[str, dict[str, Param]] = {
                         "between them it bridges; a plate's or block's zone.shape = impactor: beyond the contact radius; 0: "
                         "the laminate's thickness (a contact's own stress field decays over about it; a bonded beam: its "
                         "depth; a block: the contact radius) or four particle sizes, the larger", unit="m", low=0.0, high=0.5),
-        "grow": Param(False, "grow the zone during the run (beams, bonded beams, a plate's box, a disc's square): at each history sample "
-                      "(and also every grow_every steps) the far field's failure "
+        "grow": Param(False, "grow the zone during the run (beams, bonded beams, a plate's box, a disc's square): at each FEM step "
+                      "(zone.grow_every) the far field's failure "
                       "indices (as placement's) are evaluated, and elements whose index reaches grow_at within margin "
                       "of the zone's edge become particles, their state carried over (study/growth.py)", kind="bool"),
-        "grow_every": Param(0, "the growth is checked at each history sample (about 1000 a run, output.history_every) "
-                            "and also every this many clock steps; 0: at the samples only (a check between samples evaluates the "
-                            "far field's failure indices in one compiled pass and reads the contact and the zone's damage; "
-                            "a conversion it asks for comes at the next step, with the whole snapshot. Checked every step, "
-                            "the coarse beam ran 1.04-1.05 x slower on LIGGGHTS and YADE, 1.05-1.15 x on LAMMPS, whose "
-                            "worker is called at each check: benchmarks/growth_check.py)", kind="int", low=0),
+        "grow_every": Param(1, "the growth is checked every this many clock steps (1: each FEM step, as the far field "
+                            "steps) and at each history sample; 0: at the samples only (about 1000 a run, "
+                            "output.history_every). A check between samples evaluates the far field's failure indices in "
+                            "one compiled pass and reads the contact and the zone's damage; a conversion it asks for comes "
+                            "at the next step, with the whole snapshot. Checked every step, the coarse beam ran 1.04-1.05 x "
+                            "slower than at the samples on LIGGGHTS and YADE, 1.05-1.15 x on LAMMPS, whose worker is "
+                            "called at each check: benchmarks/growth_check.py", kind="int", low=0),
         "conversion": Param("rebuild", "how a grown zone's new particles enter the engine: rebuild (the engine is "
                             "built again with the grown zone's particles at each conversion) or release (beams, 2D and 3D: "
                             "every particle out to grow_to is in the engine from the start, slaved to the FEM, and "
