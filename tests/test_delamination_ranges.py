@@ -332,6 +332,19 @@ def test_a_bending_crack_s_path_and_its_window(case, m, h, L_rel, a_rel, overhan
             enf.window_end_placed(dict(p, **{"load.final_deflection_factor": 0.995 * float(f_max[1])}), cf, d)
         return
     assert max(L, a_end) + p["dem.margin"] <= x_b * (1 + 1e-12) and x_b <= limit * (1 + 1e-12)
+    # an unstable jump's arrest bound (the strain energy released at the initiation deflection
+    # all dissipated by Gc): past the quasi-static arrest at that deflection, inside the window
+    arrest, b = enf.arrest_crack_length(p, cf), p["geometry.width"]
+    C0 = cf["C0"] if case == "enf_coarse" else enf.compliance(p, cf, a0)[0]
+    spent = lambda a: 0.5 * delta0**2 * (1 / C0 - 1 / enf.compliance(p, cf, a)[0]) - cf["Gc"] * b * (a - a0)
+    step = (2 * L - cf["c"] - a0) / 4000
+    if enf.deflection_on_path(p, cf, a0 + 1e-6 * a0) > delta0:  # stable from the start: no jump
+        assert arrest == pytest.approx(a0, abs=1.01 * step)
+    else:
+        event("unstable")
+        a_qs = enf.final_crack_length(dict(p, **{"load.final_deflection_factor": 1.0 + 1e-9}), cf)
+        assert a_qs <= arrest and spent(arrest - step) >= 0 and (spent(arrest) < 0 or arrest >= 2 * L - cf["c"] - 2 * step)
+    assert min(limit, arrest + p["dem.margin"]) <= x_b * (1 + 1e-12)
 
 
 def test_enf_says_when_beam_theory_does_not_apply(femdem):

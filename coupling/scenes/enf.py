@@ -81,20 +81,44 @@ def closed_form(p: dict) -> dict:
             "Gc": p["interface.GIIc"], "k": 3.0, "c": 0.42 * dl.chi(p) * h, "modes": ("II",)}
 
 
-def deflection_on_path(p: dict, cf: dict, a: np.ndarray) -> np.ndarray:
-    """m, the load-point deflection at which beam theory's crack of length a (m) grows, for a
-    bending specimen whose cracked span is cf["k"] times more compliant than the uncracked one
-    per unit length (ENF 3, SLB 7), with the crack correction cf["c"] m and the toughness
-    cf["Gc"] J/m^2: delta = C(a) sqrt(2 b Gc / C'(a)) (G = P^2 C' / 2b). Past the load line the
-    crack shortens the right half span, C = (8 L^3 - k (2L - a)^3) / (8 E11 b h^3) + shear, so the
-    crack grows stably towards the right support (Castigliano, V = P/2 on both half spans)."""
+def compliance(p: dict, cf: dict, a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(C m/N, dC/da N^-1) of beam theory at crack length a (m), for a bending specimen whose
+    cracked span is cf["k"] times more compliant than the uncracked one per unit length (ENF 3,
+    SLB 7), with the crack correction cf["c"] m. Past the load line the crack shortens the right
+    half span, C = (8 L^3 - k (2L - a)^3) / (8 E11 b h^3) + shear (Castigliano, V = P/2 on both
+    half spans)."""
     E, G, b, h, L = (p["material.E11"], p["material.G13"], p["geometry.width"], p["geometry.arm_thickness"],
                      p["geometry.half_span"])
     k, ae, D = cf["k"], np.asarray(a) + cf["c"], 8 * E * b * h**3
     far = 2 * L - ae  # the uncracked length of the right half span, past the load line
     C = (2 * L**3 + k * np.where(ae <= L, ae**3, 2 * L**3 - far**3)) / D + 3 * L / (10 * G * b * h)
-    dC = 3 * k * np.where(ae <= L, ae, far) ** 2 / D
-    return C * np.sqrt(2 * b * cf["Gc"] / dC)
+    return C, 3 * k * np.where(ae <= L, ae, far) ** 2 / D
+
+
+def deflection_on_path(p: dict, cf: dict, a: np.ndarray) -> np.ndarray:
+    """m, the load-point deflection at which beam theory's crack of length a (m) grows, with the
+    toughness cf["Gc"] J/m^2: delta = C(a) sqrt(2 b Gc / C'(a)) (G = P^2 C' / 2b; C: compliance),
+    so the crack grows stably towards the right support past the load line."""
+    C, dC = compliance(p, cf, a)
+    return C * np.sqrt(2 * p["geometry.width"] * cf["Gc"] / dC)
+
+
+def arrest_crack_length(p: dict, cf: dict) -> float:
+    """m, the farthest an unstable jump can carry the crack: at the deflection of initiation
+    (held while the crack runs), the crack where the strain energy released, delta^2 / 2
+    (1 / C(a0) - 1 / C(a)), has all gone into the crack's growth, Gc b (a - a0); a0 if the
+    growth is stable (released < dissipated from the start). An upper bound: the motion the
+    jump sets off keeps some of it. Past the quasi-static arrest (final_crack_length at a small
+    final deflection factor) by up to this, without damping: an enf_coarse draw (a0 = 0.4 L,
+    factor 1.1, damping 0) ran 4.2 mm past beam theory's 66.2 mm final crack to its window's edge
+    (the window's last column 0.82 damaged); the bound is 87.8 mm."""
+    a0, L, b = p["geometry.crack_length"], p["geometry.half_span"], p["geometry.width"]
+    a = np.linspace(a0, 2 * L - cf["c"], 4001)[:-1]
+    delta = deflection_on_path(p, cf, a0)
+    C0, C = compliance(p, cf, a0)[0], compliance(p, cf, a)[0]
+    surplus = 0.5 * delta**2 * (1 / C0 - 1 / C) - cf["Gc"] * b * (a - a0)  # released - dissipated, J
+    spent = np.flatnonzero(surplus[1:] < 0)
+    return float(a[spent[0] + 1] if len(spent) else a[-1])
 
 
 def final_crack_length(p: dict, cf: dict) -> float:
@@ -123,7 +147,8 @@ def longest_zone(p: dict, cf: dict, d: float, keys: dict = dl.SCENE_KEYS) -> flo
 
 def window_end_placed(p: dict, cf: dict, d: float, keys: dict = dl.SCENE_KEYS) -> float:
     """m, the closed form's DEM window end: the load line plus dem.margin, or beam theory's
-    final crack (final_crack_length) plus the larger of dem.margin and its longest cohesive
+    final crack (final_crack_length, or where an unstable jump can carry it if further:
+    arrest_crack_length) plus the larger of dem.margin and its longest cohesive
     zone (delamination.cohesive_zone_length in the modes cf["modes"]; d the bonds' spacing),
     whichever is further, and at most geometry.length - 4 h. Refused (CaseError), with the
     largest final deflection that fits, when the final crack plus dem.margin runs past that: a
@@ -131,8 +156,8 @@ def window_end_placed(p: dict, cf: dict, d: float, keys: dict = dl.SCENE_KEYS) -
     defaults with the window at the load line plus 4 mm, as before session 32: the crack
     stopped 3 mm short of the all-FEM one's, the window's last column 0.68 damaged). The zone's
     estimate is an upper one (an SLB's mode II zone, estimated 39.8 mm, measured 15.5 mm), so a
-    window that cannot hold all of it is not refused: the check damage_at_zone_edge says
-    whether it held."""
+    window that cannot hold all of it is not refused, nor one that cannot reach the jump's
+    arrest bound (an upper one too): the check damage_at_zone_edge says whether it held."""
     L, h, a0 = p["geometry.half_span"], p["geometry.arm_thickness"], p["geometry.crack_length"]
     zone = longest_zone(p, cf, d, keys)
     margin, a_end, limit = p["dem.margin"], final_crack_length(p, cf), p["geometry.length"] - 4 * h
@@ -146,7 +171,7 @@ def window_end_placed(p: dict, cf: dict, d: float, keys: dict = dl.SCENE_KEYS) -
                         f"to {a_end:.4g} m (beam theory) and the DEM window dem.margin = {margin:g} m further, past "
                         f"geometry.length - 4 h = {limit:.4g} m, where the window ends at the latest; allowed: "
                         f"{', or '.join(allowed) or 'a longer geometry.half_span'}")
-    return min(limit, max(L + margin, a_end + max(margin, zone)))
+    return min(limit, max(L + margin, max(a_end, arrest_crack_length(p, cf)) + max(margin, zone)))
 
 
 def beam_omega(p: dict) -> float:
