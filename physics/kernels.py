@@ -378,13 +378,15 @@ def pairwise_sum(a, lo, n):
 
 
 @kernel
-def element_failure_index(u, edofs, L, c, hoffman_on, Z0, R0, hashin_on, out):
-    """out (nel,) <- the larger of each element's Hoffman index (where hoffman_on) and Hashin's
-    interlaminar index (where hashin_on), and 0, of its ply stress s = L[e] @ u[edofs[e]] (Pa;
-    L (nel, 6, nd) Pa / m, rows 11 22 33 23 13 12 in ply axes; u (ndof,) m flat);
-    c = hoffman_coefficients(strengths). The growth check's criterion, at up to every FEM step."""
+def element_failure_index(u, edofs, L, c, hoffman_on, Z0, R0, hashin_on, elements, out):
+    """out[e] <- for each e in ``elements`` (k,), the larger of the element's Hoffman index
+    (where hoffman_on) and Hashin's interlaminar index (where hashin_on), and 0, of its ply
+    stress s = L[e] @ u[edofs[e]] (Pa; L (nel, 6, nd) Pa / m, rows 11 22 33 23 13 12 in ply
+    axes; u (ndof,) m flat); c = hoffman_coefficients(strengths); out (nel,) elsewhere as it
+    was. The growth check's criterion, at up to every FEM step."""
     q23, q31, q12, l1, l2, l3, S23, S13, S12 = c
-    for e in range(L.shape[0]):
+    for k in range(elements.shape[0]):
+        e = elements[k]
         if not (hoffman_on[e] or hashin_on[e]):  # (a window's elements off its band)
             out[e] = 0.0
             continue

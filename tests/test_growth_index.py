@@ -44,7 +44,8 @@ def test_the_compiled_index_is_the_seed_criteria_at_every_element(name, angles, 
 
 def test_per_element_switches_and_a_nan():
     """Each criterion only where its switch is on, element by element (a bonded beam's Hashin on
-    its bottom row; a mask drawn at random here, for both criteria); a nan displacement gives a
+    its bottom row; a mask drawn at random here, for both criteria); asked at some elements, the
+    index there and the others left as they were; a nan displacement gives a
     nan index on the elements it touches, as numpy's maximum does, and nothing elsewhere."""
     e = ELEMENTS["quad4"]
     m = skfem.MeshQuad.init_tensor(np.linspace(0, 2e-3, 6), np.linspace(0, 1e-3, 4))
@@ -59,6 +60,11 @@ def test_per_element_switches_and_a_nan():
     expect = np.maximum(np.where(hoff_on, hoffman, 0.0), np.where(hashin_on, hashin, 0.0))
     np.testing.assert_allclose(index(u), expect, rtol=1e-10, atol=1e-300)
     assert np.any(hoff_on & (hoffman > hashin) & (index(u) > 0)) and np.any(~hoff_on & hashin_on)
+    some = rng.permutation(region.n_elements)[: region.n_elements // 3]  # (a check's elements near the edge)
+    index.out[:] = -7.0
+    got = index(u, some)
+    np.testing.assert_allclose(got[some], expect[some], rtol=1e-10, atol=1e-300)
+    assert np.all(np.delete(got, some) == -7.0)  # the others as they were
     u[5, 1] = np.nan
     touched = np.any(region.mesh.t.T == 5, axis=1) & (hoff_on | hashin_on)
     got = index(u)

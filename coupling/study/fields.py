@@ -108,12 +108,14 @@ class ElementIndex:
         self.hoffman_on = np.ascontiguousarray(np.broadcast_to(hoffman_on, n), np.bool_)
         self.hashin_on = np.ascontiguousarray(np.broadcast_to(hashin_on, n), np.bool_)
         self.Z0, self.R0 = float(Z0), float(R0)
+        self.every = np.arange(n)
         self.out = np.empty(n)  # rewritten at every call
 
-    def __call__(self, u: np.ndarray) -> np.ndarray:
-        """(nel,) the criterion at FEM displacement u (n, dim) m: this object's buffer."""
+    def __call__(self, u: np.ndarray, elements: np.ndarray | None = None) -> np.ndarray:
+        """(nel,) the criterion at FEM displacement u (n, dim) m: this object's buffer, at the
+        ``elements`` (k,) int given (the others as the last call left them), or at every one."""
         element_failure_index(u.reshape(-1), self.dofs, self.L, self.c, self.hoffman_on, self.Z0, self.R0,
-                              self.hashin_on, self.out)
+                              self.hashin_on, self.every if elements is None else elements, self.out)
         return self.out
 
 

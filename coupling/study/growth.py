@@ -177,6 +177,10 @@ class Growth:
         if self.plane:
             self._x0, self._x1 = np.maximum(self._x0, X[:, :, 1].min(axis=1)), np.maximum(self._x1, X[:, :, 1].max(axis=1))
         self._order = np.argsort(self._x0, kind="stable")  # (the elements from the centre out: flagged_reach)
+        self._x0_sorted = self._x0[self._order]
+        # the impactors whose contact patch is followed, and the axis of each (0: a sphere's point)
+        self._touching = [(m, np.zeros(3) if m.imp.axis is None else np.asarray(m.imp.axis, float))
+                          for m in built.impactors.values() if m.imp.shape in ("sphere", "cylinder", "rod")]
 
     def snap(self, x: float) -> float:
         """m, the first edge a zone may have at or beyond x: whole particle spacings."""
@@ -221,13 +225,11 @@ class Growth:
         symmetry plane's column alone), -1 without contact; a flat-faced rod's patch is its face
         (the particles under it) from the start, as placement takes a punch's."""
         reach = -1.0
-        for m in self.built.impactors.values():
-            if m.imp.shape in ("sphere", "cylinder", "rod"):
-                axis = np.zeros(3) if m.imp.axis is None else np.asarray(m.imp.axis, float)  # (a cylinder's)
-                x = m.last_positions()  # (the engine's, kept by the model: no call to a worker)
-                x = self.built.backend.positions_of(m.ids) if x is None else x
-                reach = max(reach, touched_reach(x, np.asarray(m.imp.x, float), axis, float(m.imp.radius),
-                                                 2 if self.plane else 1))
+        for m, axis in self._touching:
+            x = m.last_positions()  # (the engine's, kept by the model: no call to a worker)
+            x = self.built.backend.positions_of(m.ids) if x is None else x
+            reach = max(reach, touched_reach(x, np.asarray(m.imp.x, float), axis, float(m.imp.radius),
+                                             2 if self.plane else 1))
         return reach
 
     def _reaches(self, built) -> list:
@@ -254,9 +256,15 @@ class Growth:
         asked for is deferred to the next step (None now, ``pending`` set)."""
         clock = self.built.clock
         self.pending = -1
-        index = self.index(clock.u_snapshot)
-        w = self.half_width
+        u, w = clock.u_snapshot, self.half_width
+        # the elements that begin within the margin of the edge decide, unless one of them grows
+        # the zone: then the grown edge's margin reaches further, and every element is evaluated
+        near_edge = self._order[: np.searchsorted(self._x0_sorted, w + self.margin, side="right")]
+        index = self._index(u, near_edge)
         reach = flagged_reach(index, self._order, self._x0, self._x1, self.grow_at, w, self.margin)
+        if reach > w * (1 + 1e-9):
+            index = self.index(u)
+            reach = flagged_reach(index, self._order, self._x0, self._x1, self.grow_at, w, self.margin)
         contact = max(self.contact_reach(), self.damage_reach())
         near = contact >= 0 and contact + self.margin > w * (1 + 1e-9)  # (none: nothing to follow)
         if reach <= w * (1 + 1e-9) and not near:
@@ -266,7 +274,7 @@ class Growth:
         if target <= w * (1 + 1e-9):
             if not self.limit_warning:
                 self.limit_warning = (
-                    f"zone.grow: at t = {clock.t_snapshot:.4g} s the far field (index {index.max(initial=0.0):.2f}) or "
+                    f"zone.grow: at t = {clock.t_snapshot:.4g} s the far field (index {self.index(u).max(initial=0.0):.2f}) or "
                     f"{self.reach_name} ({max(contact, 0.0) * 1e3:.3g} mm) asks for the zone out to x = "
                     f"{(reach + self.margin) * 1e3:.4g} mm, beyond {self.limit_name} = {self.limit * 1e3:.4g} mm: the zone "
                     "grows no further")
