@@ -2,12 +2,14 @@
 beams, 2D and 3D, the plates' box zones and the discs' squares).
 
 At each FEM step (``zone.grow_every``: 1, or every so many steps and at each history sample)
-the far field's failure indices are evaluated on the FEM's displacement at that step: Hoffman's ply index when the zone's plies fail, and Hashin's
-interlaminar index when the far-field plies are tied (a cohesive far field delaminates by
-itself), the indices placement uses (study/placement.py); a bonded beam's body by Hoffman and
-its adhesive by Hashin's index on the bottom element row (fields.BondedIndices). When an element that begins within
-``zone.margin`` of the zone's edge reaches ``zone.grow_at``, or an impactor's contact patch
-(the farthest particle it touches) comes closer than the margin to the edge, the zone grows
+the far field's failure indices are evaluated on the FEM's displacement at that step:
+Hoffman's ply index when the zone's plies fail, and Hashin's interlaminar index when the
+far-field plies are tied (a cohesive far field delaminates by itself), the indices placement
+uses (study/placement.py); a bonded beam's body by Hoffman and its adhesive by Hashin's index
+on the bottom element row (fields.BondedIndices); at a check, only on the elements that begin
+within the margin of the edge, unless one of them grows the zone. When an element that begins
+within ``zone.margin`` of the zone's edge reaches ``zone.grow_at``, or an impactor's contact
+patch (the farthest particle it touches) comes closer than the margin to the edge, the zone grows
 over them and the margin, in whole particle spacings, up to ``zone.grow_to`` (a plate's box:
 the distance from the centre is max(|x|, |y|), so the square grows over them): the coupled
 model of the grown zone is built, continues from the current state, and the old one is closed.
