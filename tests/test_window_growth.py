@@ -220,6 +220,9 @@ def _grown(sets: dict) -> tuple[dict, object]:
         (result["simulation"] if result else sim).close()
 
 
+# -m slow (16 s in CI; the suite's budget): the default checks every FEM step, and the coarse
+# beam's conversions between samples run in the suite (tests/test_growth.py)
+@pytest.mark.slow
 def test_growth_checked_between_samples_keeps_a_short_lead():
     """zone.grow_every checks the growth between history samples (0: at the samples only). dcb_coarse with a 2 mm lead
     and samples every 2,000 steps (11 a run): checked at the samples only, the crack reaches the
