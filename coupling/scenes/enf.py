@@ -112,13 +112,18 @@ def arrest_crack_length(p: dict, cf: dict) -> float:
     final deflection factor) by up to this, without damping: an enf_coarse draw (a0 = 0.4 L,
     factor 1.1, damping 0) ran 4.2 mm past beam theory's 66.2 mm final crack to its window's edge
     (the window's last column 0.82 damaged); the bound is 87.8 mm."""
-    a0, L, b = p["geometry.crack_length"], p["geometry.half_span"], p["geometry.width"]
-    a = np.linspace(a0, 2 * L - cf["c"], 4001)[:-1]
+    a0, b, a = p["geometry.crack_length"], p["geometry.width"], crack_path(p, cf)
     delta = deflection_on_path(p, cf, a0)
     C0, C = compliance(p, cf, a0)[0], compliance(p, cf, a)[0]
     surplus = 0.5 * delta**2 * (1 / C0 - 1 / C) - cf["Gc"] * b * (a - a0)  # released - dissipated, J
     spent = np.flatnonzero(surplus[1:] < 0)
     return float(a[spent[0] + 1] if len(spent) else a[-1])
+
+
+def crack_path(p: dict, cf: dict) -> np.ndarray:
+    """(4000,) m, the crack lengths beam theory follows: from a0 to the right support less the
+    crack correction."""
+    return np.linspace(p["geometry.crack_length"], 2 * p["geometry.half_span"] - cf["c"], 4001)[:-1]
 
 
 def final_crack_length(p: dict, cf: dict) -> float:
@@ -128,8 +133,7 @@ def final_crack_length(p: dict, cf: dict) -> float:
     short of it (a half cohesive zone) at the defaults, 0.8 mm with E11 = 40 GPa and a
     deflection factor of 6 (the crack 0.84 of the way to the right support)."""
     from scipy.optimize import brentq
-    a0, L = p["geometry.crack_length"], p["geometry.half_span"]
-    a = np.linspace(a0, 2 * L - cf["c"], 4001)[:-1]
+    a0, a = p["geometry.crack_length"], crack_path(p, cf)
     delta = deflection_on_path(p, cf, a)
     target = p["load.final_deflection_factor"] * delta[0]
     i = int(np.argmin(delta))  # the stable branch starts at the minimum
