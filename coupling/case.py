@@ -102,7 +102,7 @@ def load_case(name_or_path: str, overrides: dict[str, Any] | None = None) -> Cas
                         "at most 100 characters")
     scene = SCENES[scene_name]
     schema = {**COMMON, **scene.PARAMETERS}
-    params = resolve(schema, flatten(data), f"case file {path.name}")
+    params = resolve(schema, flatten(data), f"case file {path.name}", typed=True)
     if overrides:
         resolve(schema, overrides, "--set")  # unknown keys, bad values
         params.update({k: schema[k].coerce(k, v) for k, v in overrides.items()})
@@ -119,7 +119,7 @@ def _load_study(path: Path, data: dict, overrides: dict[str, Any] | None) -> Cas
     study = Study(name, data, path.name)
     schema = {**COMMON, **study.PARAMETERS}
     given = flatten({k: v for k, v in data.items() if k not in ("case", "ranges")})
-    params = resolve(schema, given, f"case file {path.name}")
+    params = resolve(schema, given, f"case file {path.name}", typed=True)
     if overrides:
         resolve(schema, overrides, "--set", renamed=lambda key: renamed(key, study))
         fixed = sorted(k for k in overrides if study.structural(k) and schema[k].coerce(k, overrides[k]) != params[k])

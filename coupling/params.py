@@ -53,13 +53,24 @@ class Param:
         what = {"float": "a number", "int": "an integer", "str": "a string"}[self.kind]
         return what + (" " + " and ".join(parts) if parts else "") + (f" [{self.unit}]" if self.unit else "")
 
-    def coerce(self, key: str, value: Any) -> Any:
-        """Return the value in this parameter's type, or raise CaseError."""
+    def coerce(self, key: str, value: Any, typed: bool = False) -> Any:
+        """Return the value in this parameter's type, or raise CaseError.
+
+        typed: the value comes from a case file, whose TOML says its type: text ("5", "true")
+        for a number or a switch, and a fraction (5.0) for an integer, are refused there (a
+        quoted number is most often a slip); text from --set is parsed.
+        """
         bad = CaseError(f"{key} = {value!r}: expected {self.allowed()}")
         if self.kind == "table":
+            if typed and isinstance(value, str):
+                raise CaseError(f"{key} = {value!r}: expected {self.allowed()} (unquoted in a case file)")
             return _table(value, bad)
         if isinstance(value, str) and self.kind != "str":
+            if typed:
+                raise CaseError(f"{key} = {value!r}: expected {self.allowed()} (unquoted in a case file)")
             value = _parse_scalar(value)
+        if typed and self.kind == "int" and isinstance(value, float):
+            raise CaseError(f"{key} = {value!r}: expected {self.allowed()} (no decimal point in a case file)")
         if self.kind == "bool":
             if not isinstance(value, bool):
                 raise bad
@@ -189,10 +200,11 @@ RENAMED: dict[str, tuple[tuple[str, str], ...]] = {
 
 
 def resolve(schema: dict[str, Param], given: dict[str, Any], where: str,
-            renamed: Callable[[str], str | None] | None = None) -> dict[str, Any]:
+            renamed: Callable[[str], str | None] | None = None, typed: bool = False) -> dict[str, Any]:
     """Defaults overlaid with ``given`` (flat dotted keys), every value checked.
 
     where: what supplied ``given`` ("case file x.toml", "--set"), for the error line;
+    typed: ``given`` comes from TOML, whose values carry their type (Param.coerce);
     renamed: old key -> its new name (None if it never existed), for the error line.
     """
     unknown = sorted(set(given) - set(schema))
@@ -207,7 +219,7 @@ def resolve(schema: dict[str, Param], given: dict[str, Any], where: str,
         raise CaseError(f"{key}: unknown key in {where}{hint}")
     out = {k: p.default for k, p in schema.items()}
     for k, v in given.items():
-        out[k] = schema[k].coerce(k, v)
+        out[k] = schema[k].coerce(k, v, typed)
     return out
 
 

@@ -1,8 +1,13 @@
 """Bad input: one clear line naming key, value and what is allowed; exit code 2; nothing written."""
+import re
+from pathlib import Path
+
 import pytest
 from hypothesis import given, strategies as st
 
 from coupling.params import CaseError, Param, resolve
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def _bad_case(tmp_path, body):
@@ -68,6 +73,23 @@ def test_positive_param_accepts_exactly_positive_finite(x):
         assert p.coerce("k", x) == x and ok
     except CaseError as exc:
         assert not ok and "k = " in str(exc)
+
+
+@given(kind=st.sampled_from(["float", "int", "bool"]), value=st.one_of(st.integers(-10**6, 10**6), st.booleans(),
+       st.floats(-1e6, 1e6)))
+def test_typed_values_are_taken_as_typed_and_text_only_from_the_command_line(kind, value):
+    """A case file's value (typed) is taken only in its own type; the same value as text (--set)
+    parses to the same result."""
+    p = Param(0, kind=kind)
+    own = (kind == "bool") == isinstance(value, bool) and (kind != "int" or isinstance(value, int))
+    try:
+        assert p.coerce("k", value, typed=True) == value and own
+    except CaseError:
+        assert not own
+    if own:
+        assert p.coerce("k", str(value).lower()) == value
+    with pytest.raises(CaseError, match="unquoted"):
+        p.coerce("k", str(value), typed=True)
 
 
 @given(st.dictionaries(st.sampled_from(["a.x", "a.y", "b.z", "c.w"]), st.integers(-5, 5)))
@@ -146,6 +168,11 @@ CASE_FILES = {  # name: (bytes of the case file, words the one line must hold)
     "inf": (GOOD.encode() + b"[clock]\nt_end = inf\n", ["clock.t_end = inf"]),
     "huge int": (GOOD.encode() + b"[output]\nfield_frames = 99999999999999999999\n", ["output.field_frames", "<= 10000"]),
     "fraction for an int": (GOOD.encode() + b"[output]\nfield_frames = 2.5\n", ["output.field_frames = 2.5"]),
+    # TOML is typed: a quoted number or switch in a case file is a slip, refused (--set parses text)
+    "quoted number": (GOOD.encode() + b"[clock]\nsafety = '0.5'\n", ["clock.safety = '0.5'", "unquoted"]),
+    "quoted int": (GOOD.encode() + b"[output]\nfield_frames = \"10\"\n", ["output.field_frames = '10'", "unquoted"]),
+    "whole float for an int": (GOOD.encode() + b"[output]\nfield_frames = 10.0\n",
+                               ["output.field_frames = 10.0", "integer", "decimal point"]),
     "a date": (GOOD.encode() + b"[clock]\nt_end = 1979-05-27\n", ["clock.t_end", "number"]),
     "duplicated key": (GOOD.encode() + b"[clock]\nsafety = 0.5\nsafety = 0.6\n", ["not valid TOML"]),
     "kinematic tie with a penalty": (b'[case]\nscene = "chain_consistency"\n[coupling]\ntie_penalty = 1e8\n',
@@ -166,6 +193,26 @@ def test_bad_case_file_catalogue(femdem, tmp_path, name):
     for w in words:
         assert w in err, (w, err)
     assert not list(tmp_path.glob("run*")), "nothing may be left behind on bad input"
+
+
+@pytest.mark.parametrize("old, new, words", [
+    (r"E11 = (137.9e9)", r"E11 = '\1'", [".E11 = '137.9e9'", "unquoted"]),
+    (r"seed = (1)\n", r"seed = \1.0\n", [".seed = 1.0", "decimal point"]),
+    (r"curve = (\[\[.*?\]\])", r"curve = '''\1'''", ["loads.drop.curve", "unquoted"]),
+])
+def test_a_study_file_s_values_keep_their_toml_type(femdem, tmp_path, old, new, words):
+    """A study file's numbers and curves are typed as in any case file: quoted, refused."""
+    text = (ROOT / "cases" / "seed" / "cfrp_beam_impact_coarse.toml").read_text()
+    text, n = re.subn(old, new, text, count=1, flags=re.S)
+    assert n == 1, old  # (the seed file still says it this way)
+    path = tmp_path / "quoted.toml"
+    path.write_text(text)
+    code, summary, err = femdem("run", str(path))
+    assert code == 2 and summary is None, err
+    assert len(err.strip().splitlines()) == 1, err
+    for w in words:
+        assert w in err, (w, err)
+    assert not list(tmp_path.glob("run*"))
 
 
 @pytest.mark.parametrize("encoding", ["utf-8-sig", "utf-16", "utf-32"])

@@ -105,8 +105,9 @@ def test_killed_case_resumes_to_the_uninterrupted_result(tmp_path, case):
     assert not leftovers, leftovers  # no checkpoint, lock, scratch or engine files left in a finished run
 
 
-# one rank with -m slow (18 s, the suite's budget): two ranks resume the same hosted models
-@pytest.mark.parametrize("ranks", [pytest.param(1, marks=pytest.mark.slow), 2])
+# two ranks with -m slow (36 s, the suite's budget): the suite resumes one rank bit for bit, and
+# tests/test_engines.py holds several ranks to one
+@pytest.mark.parametrize("ranks", [1, pytest.param(2, marks=pytest.mark.slow)])
 def test_models_hosted_in_the_lammps_worker_resume_bit_for_bit(tmp_path, ranks):
     """The law bonds and the impactor run inside the LAMMPS worker (on two ranks: each rank the
     bonds of its atoms); a checkpoint takes their state from there and a resume puts it back:

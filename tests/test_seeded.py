@@ -71,7 +71,8 @@ def _same_run(dem: str, name: str = "beam_impact_coarse", sets: dict = GROW, unt
     return rebuilt, released
 
 
-@pytest.mark.parametrize("dem", ["liggghts", "lammps"])
+# LAMMPS with -m slow (21 s, the suite's budget): the suite resumes LAMMPS' released particles below
+@pytest.mark.parametrize("dem", ["liggghts", pytest.param("lammps", marks=pytest.mark.slow)])
 def test_released_particles_answer_as_a_rebuilt_engine(dem):
     _same_run(dem)
 

@@ -3,6 +3,8 @@
 A study file is TOML in SI units. Named tables (``[materials.graphite_epoxy]``) hold a kind's
 fields; every value has one flat dotted key (``materials.graphite_epoxy.E11``), the key that
 ``--set`` takes and summary.json echoes. ``femdem schema`` prints this file's tables.
+A value keeps its TOML type: numbers unquoted (``"5"`` is text, refused), integers without a
+decimal point; ``--set`` reads its text as a number where the key takes one.
 
 Sections (one concept, one key):
 - case:         description, name, t_end, modes, reference_elements, no_fracture_reference
@@ -514,7 +516,7 @@ def _fields(prefix: str, fields: dict[str, Param], given: dict, where: str) -> d
     for field, param in fields.items():
         key = f"{prefix}.{field}"
         if field in given:
-            value = param.coerce(key, given[field])
+            value = param.coerce(key, given[field], typed=True)
         elif param.default is REQUIRED:
             raise CaseError(f"{key}: required in {where}; allowed: {param.allowed()} ({param.doc})")
         else:
