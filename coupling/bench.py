@@ -89,11 +89,11 @@ def sweep_points(case_name: str, sweep: dict[str, list[str]], base: dict, ref_mo
     todo = [(ref_mode, engines[0], {**base, **ref_set})]
     todo += [(mode, e, {**base, **dict(zip(keys, combo))})
              for e, combo in itertools.product(engines, itertools.product(*(sweep[k] for k in keys)))]
-    for m, engine, sets in todo:
+    for k, (m, engine, sets) in enumerate(todo):
         case = load_case(case_name, sets)
         if m not in case.scene.MODES:
             raise CaseError(f"--mode {m}: case {case.name} supports {', '.join(case.scene.MODES)}")
-        refuse_ineffective(case, m, engine if m != "fem" else None)
+        refuse_ineffective(case, m, engine if m != "fem" else None, reference=k == 0)
     return [(e, s) for _, e, s in todo[1:]]
 
 

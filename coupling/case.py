@@ -131,16 +131,25 @@ def _load_study(path: Path, data: dict, overrides: dict[str, Any] | None) -> Cas
     return Case(name, study, params, path.absolute(), study.DESCRIPTION, frozenset(overrides or ()))
 
 
-def refuse_ineffective(case: Case, mode: str, dem: str | None) -> None:
+# a zone's placement and growth: coupled runs only (a bench's reference run takes them from the
+# coupled runs' --set, and ignores them)
+ZONE_GROWTH = ("zone.grow", "zone.grow_at", "zone.grow_to", "zone.grow_every", "zone.conversion", "zone.placement",
+               "zone.margin")
+
+
+def refuse_ineffective(case: Case, mode: str, dem: str | None, reference: bool = False) -> None:
     """CaseError for a setting that would change nothing in this configuration (a user who
     sets it expects an effect): DEM and coupling keys of --set in a run without them, a
-    growing zone's settings without zone.grow, a penalty stiffness with the kinematic tie."""
+    growing zone's settings without zone.grow, a penalty stiffness with the kinematic tie.
+    reference: a bench's reference run, which takes the compared runs' zone settings."""
     p = case.parameters
     if mode == "fem" and dem is not None:
         raise CaseError(f"--dem {dem}: --mode fem runs no DEM engine; allowed: leave --dem out")
     no_dem = ("dem.", "coupling.tie", "clock.substeps", "zone.half_width", "zone.shape", "zone.particle_size",
               "zone.window_", "zone.ply_failure")
     no_tie = ("coupling.tie", "clock.substeps", "zone.half_width")  # all-DEM: the zone is the whole body
+    if not reference:
+        no_dem, no_tie = no_dem + ZONE_GROWTH, no_tie + ZONE_GROWTH
     schema = {**COMMON, **case.scene.PARAMETERS}
     for key in sorted(k for k in case.given if p[k] != schema[k].default):  # the default changes nothing
         if mode == "fem" and key.startswith(no_dem) or mode == "dem" and key.startswith(no_tie):

@@ -252,6 +252,10 @@ def test_case_files_with_a_byte_order_mark_are_read(femdem, tmp_path, encoding):
     (["run", "chain_consistency", "--mode", "dem", "--set", "coupling.tie=penalty"], ["coupling.tie", "no effect"]),
     (["run", "chain_consistency", "--mode", "fem", "--set", "dem.process=worker"], ["dem.process", "no effect"]),
     (["run", "beam_impact_coarse", "--mode", "dem", "--set", "zone.half_width=6e-3"], ["zone.half_width", "no effect"]),
+    (["run", "beam_impact_coarse", "--mode", "fem", "--set", "zone.grow=true"], ["zone.grow", "no effect", "--mode fem"]),
+    (["run", "beam_impact_coarse", "--mode", "dem", "--set", "zone.placement=auto"], ["zone.placement", "no effect"]),
+    (["run", "dcb_coarse", "--mode", "fem", "--set", "zone.grow_at=0.4"], ["zone.grow_at", "no effect", "--mode fem"]),
+    (["bench", "beam_impact_coarse", "--mode", "dem", "--set", "zone.grow=true"], ["zone.grow", "no effect", "--mode dem"]),
     (["run", "beam_impact_coarse", "--set", "zone.grow_to=0.05"], ["zone.grow_to = 0.05", "no effect", "zone.grow"]),
     (["run", "cfrp_beam_impact_coarse", "--set", "zone.conversion=release"], ["zone.conversion", "no effect"]),
     (["run", "dcb_coarse", "--set", "zone.grow_every=100"], ["zone.grow_every = 100", "no effect", "zone.grow"]),
@@ -397,3 +401,15 @@ def test_params_lists_every_key_with_its_range_and_round_trips(capsys):
             given[key] = str(ast.literal_eval(value))
         assert load_case(name, given).parameters == case.parameters
     assert main(["params", "no_such_case"]) == 2
+
+
+def test_a_bench_s_reference_takes_the_compared_runs_zone_settings():
+    """--set applies to a bench's runs and its reference alike: a growing zone's keys are the
+    coupled runs', and the all-DEM or all-FEM reference takes them without effect (a run of
+    its own in those modes refuses them: the catalogue above)."""
+    from coupling.bench import sweep_points
+    grow = {"zone.grow": "true", "zone.grow_at": "0.4"}
+    for ref in ("dem", "fem"):
+        points = sweep_points("beam_impact_coarse", {"zone.grow_every": ["0", "1"]}, grow, ref, {}, "liggghts", "coupled")
+        assert [s["zone.grow_every"] for _, s in points] == ["0", "1"]
+
