@@ -136,6 +136,9 @@ class ExplicitDynamics:
         # as the supports' order unless a DOF is both fixed and moving: then each in turn)
         overlap = any(np.isin(sup.dofs, rest).any() for sup in self._moving)
         self._rest_dofs = None if overlap else rest
+        # each support's DOFs as places in the prescribed ones: their accelerations set in order
+        self._a_pres = np.zeros(self._prescribed.size)
+        self._pres_place = [np.searchsorted(self._prescribed, sup.dofs) for sup in self.supports]
         self._contact_buffers = [tuple((np.zeros((len(self._surface), r.dim)), np.zeros(r.dim)) for _ in range(2))
                                  for _ in self.impactors]
         self._xs, self._vs = np.zeros((len(self._surface), r.dim)), np.zeros((len(self._surface), r.dim))
@@ -292,10 +295,10 @@ class ExplicitDynamics:
         t, dt = self.state.t, getattr(self, "_dt", 0.0)
         if not self._moving or dt <= 0:
             return self._a_rest
-        a = np.zeros(self.region.ndof)
-        for sup in self.supports:
-            a[sup.dofs] = (sup.velocity(t + 0.5 * dt) - sup.velocity(t - 0.5 * dt)) / dt
-        return a[self._prescribed]
+        a = self._a_pres  # (in its buffer: nothing of the mesh's size allocated per step)
+        for sup, place in zip(self.supports, self._pres_place):
+            a[place] = (sup.velocity(t + 0.5 * dt) - sup.velocity(t - 0.5 * dt)) / dt
+        return a
 
     def kick(self, dt: float) -> None:
         """v_{n+1} = v_{n+1/2} + dt/2 a_{n+1}; kinetic-energy ledger; dynamic relaxation."""
