@@ -72,8 +72,8 @@ def test_the_block_conserves_mass_in_every_mode():
         sim, built = case.scene.assemble(p, mode, "liggghts")
         m = 0.0
         if built.dyn is not None:
-            m += sum(np.ptp(built.dyn.region.X[e], axis=0).prod() for e in built.dyn.region.mesh.t.T) * \
-                p["materials.alumina.rho"]
+            X, t = built.dyn.region.X, built.dyn.region.mesh.t  # (hexahedra along the axes: their boxes)
+            m += float(np.ptp(X[t], axis=0).prod(axis=-1).sum()) * p["materials.alumina.rho"]
         if built.lattice is not None:
             m += float(np.sum(built.lattice.volume)) * p["materials.alumina.rho"]
             built.backend.finalize()

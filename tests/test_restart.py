@@ -44,8 +44,6 @@ def _kill_after_checkpoint(args, out: Path, timeout=120):
 
 @pytest.mark.parametrize("case, sets", [
     ("free_vibration", ["run.steps=40000", "output.checkpoint_every=4000", "output.history_every=100"]),
-    ("coupled_vibration", ["run.steps=4000", "output.checkpoint_every=400", "clock.substeps=2",
-                           "output.history_every=20"]),
     ("coupled_vibration --dem liggghts", ["run.steps=4000", "output.checkpoint_every=400", "clock.substeps=2",
                                           "output.history_every=20"]),
     ("coupled_vibration --dem lammps", ["run.steps=2000", "output.checkpoint_every=400", "clock.substeps=2",

@@ -26,6 +26,9 @@ FULL = {"beam_impact", "beam_impact_3d", "cfrp_beam_impact", "cfrp_beam_impact_3
 SLOW = {"panel_buckling_coarse", "cfrp_beam_impact_3d_coarse", "beam_impact_3d_coarse", "dcb_coarse", "enf_coarse",
         "mixed_mode_coarse", "rod_impact_coarse", "beam_impact_coarse", "coupled_vibration", "bonded_beam_bending",
         "ply_fracture", "column_buckling", "cfrp_beam_impact_coarse", "bond_strength"}
+# with -m slow too (the suite's budget): the Chung-Ooi test 3 is test 2's scene (a sphere on a
+# fixed one) with other constants, and free_vibration's resume is tests/test_restart.py's first
+SLOW |= {"chung_ooi_3", "free_vibration"}
 CASES = [pytest.param(c, marks=pytest.mark.slow) if c in SLOW else c for c in bundled_cases() if c not in FULL]
 ENV = {**os.environ, "PYTHONPATH": str(ROOT)}
 
