@@ -101,6 +101,24 @@ def _same_at_both_sizes(small_run: tuple, large_run: tuple) -> None:
             f"stage {name}: {small[name]:.0f} B a step at {n_small}, {large[name]:.0f} B at {n_large}"
 
 
+def _force_evaluation_peak(dyn) -> float:
+    """Median transient bytes of the FEM's force evaluation over 30 steps of ``dyn`` (started),
+    after the first ten."""
+    dt, peaks = 0.5 * dyn.critical_dt(), []
+    tracemalloc.start()
+    try:
+        for _ in range(30):
+            dyn.kick_drift(dt)
+            held, _ = tracemalloc.get_traced_memory()
+            tracemalloc.reset_peak()
+            dyn.compute_forces()
+            peaks.append(tracemalloc.get_traced_memory()[1] - held)
+            dyn.kick(dt)
+    finally:
+        tracemalloc.stop()
+    return statistics.median(peaks[10:])
+
+
 def test_the_fem_step_allocates_nothing_under_stiffness_damping_and_bulk_viscosity():
     """Stiffness-proportional (beta) damping, the bulk viscosity and the viscous hourglass
     control, which no case file reaches (library options of ExplicitDynamics): the FEM's force
@@ -120,19 +138,9 @@ def test_the_fem_step_allocates_nothing_under_stiffness_damping_and_bulk_viscosi
         dyn = ExplicitDynamics(r, beta=1e-7, bulk_viscosity=BulkViscosity.of(r))
         dyn.state.v[:] = -(r.X - r.X.mean(axis=0))  # compressed: the bulk viscosity acts
         dyn.start()
-        dt, peaks = 0.5 * dyn.critical_dt(), []
-        tracemalloc.start()
-        try:
-            for _ in range(30):
-                dyn.kick_drift(dt)
-                held, _ = tracemalloc.get_traced_memory()
-                tracemalloc.reset_peak()
-                dyn.compute_forces()
-                peaks.append(tracemalloc.get_traced_memory()[1] - held)
-        finally:
-            tracemalloc.stop()
+        bytes_ = _force_evaluation_peak(dyn)
         assert dyn.ledger.damping != 0.0  # the damping forces did work
-        return statistics.median(peaks[10:]), r.n_nodes
+        return bytes_, r.n_nodes
 
     (small, n_small), (large, n_large) = peak(20), peak(40)
     assert large - small < 8 * (n_large - n_small) / 4, (small, large)
@@ -157,20 +165,9 @@ def test_the_fem_step_allocates_nothing_under_a_moving_support():
         dyn = ExplicitDynamics(r, supports=[PrescribedMotion(np.concatenate([2 * left, 2 * left + 1])),
                                             PrescribedMotion(2 * right, lambda t: -1e3 * t)])
         dyn.start()
-        dt, peaks = 0.5 * dyn.critical_dt(), []
-        tracemalloc.start()
-        try:
-            for _ in range(30):
-                dyn.kick_drift(dt)
-                held, _ = tracemalloc.get_traced_memory()
-                tracemalloc.reset_peak()
-                dyn.compute_forces()
-                peaks.append(tracemalloc.get_traced_memory()[1] - held)
-                dyn.kick(dt)
-        finally:
-            tracemalloc.stop()
+        bytes_ = _force_evaluation_peak(dyn)
         assert dyn.ledger.support_work != 0.0  # the moving end did work
-        return statistics.median(peaks[10:]), r.n_nodes
+        return bytes_, r.n_nodes
 
     (small, n_small), (large, n_large) = peak(200), peak(800)
     assert large - small < 8 * (n_large - n_small) / 4, (small, large)
