@@ -87,6 +87,7 @@ class LawBonds:
         self.delta = np.zeros((nb, 3))  # separation at the last evaluation, m
         self.traction = np.zeros((nb, 3))  # Pa
         self.work = 0.0  # J, work of the bond forces on the separations (slice)
+        self.friction_work = 0.0  # J, its share done by the tangential tractions of failed bonds
         self.t_failed = np.full(nb, np.nan)  # s, when each bond reached full decohesion
         self.force = np.zeros((nb, 3))  # N on each bond's second particle at the last evaluation
         self.time = 0.0
@@ -157,6 +158,12 @@ class LawBonds:
         self.time += dt
         self.t_failed[newly] = self.time
         self.work += 0.5 * float(np.einsum("b,bi,bi->", self.area, self.traction + t, delta - self.delta))
+        # the friction's share: the tangential tractions of failed bonds (of this step's, and the
+        # last step's of those failed then)
+        tangential = lambda tr: tr - np.einsum("bi,bi->b", tr, self.normal)[:, None] * self.normal
+        f = np.where(failed[:, None], tangential(t), 0.0) + np.where((self.damage >= 1.0)[:, None],
+                                                                     tangential(self.traction), 0.0)
+        self.friction_work += 0.5 * float(np.einsum("b,bi,bi->", self.area, f, delta - self.delta))
         self.delta, self.traction, self.damage = delta, t, d
         self.force[:] = -self.area[:, None] * (self._to_global(t) if self.finite_rotation else t)
         return self.force
@@ -247,7 +254,7 @@ class LawBonds:
         P, law = self._plan, self.law
         self.time += dt
         ply = P.law == law_kernels.PLY
-        work, snap = P.bonds_pass(
+        work, fwork, snap = P.bonds_pass(
             x, end, P.loc, self.d0, self.normal, self.area, P.K,
             P.kin, P.X_mid, P.dir_a, P.dir_b, P.dir_e, P.dir_h, P.un, P.s0, P.L0, P.axis, P.local, P.rot, P.chord,
             P.law, P.hp, P.pstress, P.inc_ptr, P.inc_bond, P.cell, P.axes, P.aligned, P.ply_axes,
@@ -257,6 +264,7 @@ class LawBonds:
             float(self.friction), float(self.v_reg), float(dt), self.time,
             self.damage, self.delta, self.traction, self.t_failed, P.slots, P.active)
         self.work += work
+        self.friction_work += fwork
         if snap:
             law.snapback += int(snap)
         if between_passes is not None:
@@ -306,6 +314,11 @@ class LawBonds:
         """J, decohesion + friction so far (slice)."""
         return self.work - self.stored_energy()
 
+    def decohesion_energy(self) -> float:
+        """J, what decohesion alone dissipated so far (slice): the dissipation less the friction
+        of closed failed faces."""
+        return self.dissipated_energy() - self.friction_work
+
     def force_on(self, particles: np.ndarray) -> np.ndarray:
         """(3,) N, total bond force on the set ``particles`` at the last evaluation."""
         mask = np.isin(self.pairs, particles)
@@ -323,7 +336,7 @@ class LawBonds:
 
     def checkpoint_state(self) -> dict:
         d = {"damage": self.damage, "delta": self.delta, "traction": self.traction, "work": self.work,
-             "t_failed": self.t_failed, "time": self.time}
+             "friction_work": self.friction_work, "t_failed": self.t_failed, "time": self.time}
         for k in _LAW_STATE:
             if hasattr(self.law, k):
                 d["law_" + k] = getattr(self.law, k)
@@ -333,6 +346,7 @@ class LawBonds:
         for k in ("damage", "delta", "traction", "t_failed"):
             setattr(self, k, np.array(d[k], float))
         self.work, self.time = float(d["work"]), float(d["time"])
+        self.friction_work = float(d.get("friction_work", 0.0))  # (0 in a checkpoint written before it)
         for k in _LAW_STATE:
             if "law_" + k in d:
                 v = np.array(d["law_" + k])

@@ -68,7 +68,9 @@ def _bonds_pass(x, end, loc, d0, normal, area, Kb,
     bool updated.
     State updated in place: damage (nb,), delta, traction (nb, 3), t_failed (nb,) s; slots
     (nb, S, 3) N: 0 the force on the second end (its first end takes minus it), then per tangent
-    the vector on each particle of the next pair b and of the previous pair a. Returns (work of this step J, new snapbacks)."""
+    the vector on each particle of the next pair b and of the previous pair a. Returns (work of
+    this step J, the friction's share of it J, new snapbacks): the friction's, the work of the
+    tangential tractions of failed bonds (their normal one is the contact's penalty)."""
     nb = end.shape[0]
     ndir = dir_a.shape[0]
     if kin == FIXED and ndir > 0:  # the pairs' mean normal displacement, for the slope terms
@@ -102,6 +104,7 @@ def _bonds_pass(x, end, loc, d0, normal, area, Kb,
             pstress[p, 3], pstress[p, 4], pstress[p, 5] = 0.5 * (s12 + s21) / v, 0.5 * (s02 + s20) / v, \
                 0.5 * (s01 + s10) / v
     work = 0.0
+    fwork = 0.0
     snapbacks = 0
     for a_ in prange(active.shape[0]):
         m = active[a_]
@@ -180,6 +183,13 @@ def _bonds_pass(x, end, loc, d0, normal, area, Kb,
         if d >= 1.0 and not d_old >= 1.0:
             t_failed[m] = time
         work += area[m] * ((r0 + t0) * (g0 - o0) + (r1 + t1) * (g1 - o1) + (r2 + t2) * (g2 - o2))
+        if d >= 1.0:  # failed: its tangential traction is friction (before it failed, none)
+            tt = t0 * n0 + t1 * n1 + t2 * n2
+            f0, f1, f2 = t0 - tt * n0, t1 - tt * n1, t2 - tt * n2
+            if d_old >= 1.0:
+                rr = r0 * n0 + r1 * n1 + r2 * n2
+                f0, f1, f2 = f0 + r0 - rr * n0, f1 + r1 - rr * n1, f2 + r2 - rr * n2
+            fwork += area[m] * (f0 * (g0 - o0) + f1 * (g1 - o1) + f2 * (g2 - o2))
         delta[m, 0], delta[m, 1], delta[m, 2] = g0, g1, g2
         traction[m, 0], traction[m, 1], traction[m, 2] = t0, t1, t2
         damage[m] = d
@@ -206,7 +216,7 @@ def _bonds_pass(x, end, loc, d0, normal, area, Kb,
                 for k in range(3):
                     slots[m, 1 + 2 * t, k] = -q * normal[b, k]
                     slots[m, 2 + 2 * t, k] = q * normal[a, k]
-    return 0.5 * work, snapbacks
+    return 0.5 * work, 0.5 * fwork, snapbacks
 
 
 @kernel

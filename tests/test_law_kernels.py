@@ -123,6 +123,9 @@ def test_fused_kernels_are_the_reference_law(name, seed, strain, spin, noise, dt
         if hasattr(fused.law, key):
             np.testing.assert_array_equal(getattr(fused.law, key), getattr(ref.law, key))
     assert fused.work == pytest.approx(ref.work, rel=1e-12, abs=1e-12 * (abs(ref.work) + 1e-30))
+    # the friction's share of it (the tangential tractions of failed bonds), in both
+    assert fused.friction_work == pytest.approx(ref.friction_work, rel=1e-9, abs=1e-12 * (abs(ref.work) + 1e-30))
+    assert ref.friction_work >= -1e-9 * abs(ref.work)  # friction takes energy, never gives it
 
 
 def test_the_copy_path_is_the_array_path():

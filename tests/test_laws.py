@@ -337,3 +337,38 @@ def test_finite_rotation_is_refused_where_it_is_not_built():
     X = np.array([[0.0, 0.0, 0.0], [0.0, 1e-3, 0.0]])
     with pytest.raises(ValueError, match="central law"):
         LawBonds([[0, 1]], X, [[0.0, 1.0, 0.0]], 1e-6, AS4, finite_rotation=True)
+
+
+@pytest.mark.parametrize("path", ["apply", "apply_reference"])
+@settings(max_examples=10, deadline=None, derandomize=True)
+@given(friction=st.floats(0.0, 1.0), press=st.floats(1e-8, 1e-6), slip=st.floats(1e-6, 1e-4))
+def test_friction_s_work_is_kept_apart_from_the_decohesion(path, friction, press, slip):
+    """A bond opened in mode I past decohesion (linear softening: GIc x its area dissipated), then
+    pressed shut by ``press`` and slid by ``slip`` (m) at a rate far above the friction's
+    regularisation: the decohesion's share stays GIc x area, the friction's is mu |t_n| x slip x
+    area, and together they are the bond's whole dissipation (the compiled step and the numpy one)."""
+    from physics.law_bonds import LawBonds
+    X = np.array([[0.0, 0.0, 0.0], [0.0, 1e-3, 0.0]])
+    A = 1e-6
+    bonds = LawBonds([[0, 1]], X, [[0.0, 1.0, 0.0]], A, AS4, friction=friction)
+    eng, dt = _PointEngine(X.copy()), 1e-8
+    step = lambda: (eng.f.fill(0.0), getattr(bonds, path)(eng, dt))
+    opening = 1.5 * 2 * AS4.GIc / AS4.Z0  # past the final opening
+    for u in np.linspace(0.0, opening, 2001)[1:]:
+        eng.x[1] = X[1] + [0.0, u, 0.0]
+        step()
+    assert bonds.failed().all()
+    # shut, a step landing on contact (the trapezoid over a step across it books K u u_prev / 2),
+    # and pressed: the contact's penalty stores what it takes
+    for u in np.concatenate([np.linspace(opening, 0.0, 101)[1:], np.linspace(0.0, -press, 21)[1:]]):
+        eng.x[1] = X[1] + [0.0, u, 0.0]
+        step()
+    n = 200
+    for k in range(1, n + 1):  # slid at slip / (n dt), >= 5e-1 m/s against v_reg 1e-3 m/s
+        eng.x[1] = X[1] + [slip * k / n, -press, 0.0]
+        step()
+    GIc_work = AS4.GIc * A
+    assert bonds.decohesion_energy() == pytest.approx(GIc_work, rel=1e-3)
+    friction_work = friction * AS4.K * press * slip * A
+    assert bonds.friction_work == pytest.approx(friction_work, rel=1e-2, abs=1e-9 * GIc_work)
+    assert bonds.dissipated_energy() == pytest.approx(bonds.decohesion_energy() + bonds.friction_work, rel=1e-12)

@@ -459,6 +459,11 @@ class CrackPlane:
         """J, what the pairs dissipated (per slice thickness)."""
         return sum(b.dissipated_energy() for b in self.families)
 
+    def decohesion_energy(self) -> float:
+        """J, what the pairs' decohesion dissipated (per slice thickness): less the friction of
+        closed failed faces, which a toughness does not hold."""
+        return sum(b.decohesion_energy() for b in self.families)
+
 
 @dataclass
 class BandWindow:

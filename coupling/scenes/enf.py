@@ -284,7 +284,7 @@ def bending_model(p: dict, mode: str, dem: str, cf: dict, single_leg: bool, x_b:
         "load": lambda: -wf * fem.reaction(2 * punch + 1),
         "deflection": lambda: -float(fem.state.u[under, 1].mean()),
         "crack_tip": plane.tip,
-        "interface_dissipated": lambda: wf * plane.dissipated_energy(),
+        "interface_dissipated": lambda: wf * plane.decohesion_energy(),
         "cohesive_zone_bonds": plane.softening,
     })
     sim.counts["law_bonds"] = len(plane.families[-1].pairs)  # (the window's, or all-FEM's: interface_bonds)

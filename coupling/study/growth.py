@@ -484,6 +484,7 @@ class _Transfer:
         rows = _bond_map(old[0].bonds.pairs, new[0].bonds.pairs, node)
         _carry_bonds(new[0].bonds, old[0].bonds, rows)
         new[0].bonds.work, new[0].bonds.time = old[0].bonds.work, old[0].bonds.time
+        new[0].bonds.friction_work = old[0].bonds.friction_work
         new[0].last = old[0].last
 
     def _carry_models(self, models, was: np.ndarray, x: np.ndarray) -> None:
@@ -494,7 +495,7 @@ class _Transfer:
                 _carry_bonds(new, old, rows)
                 if hasattr(new.law, "snapback"):
                     new.law.snapback = old.law.snapback
-                new.work, new.time = old.work, old.time
+                new.work, new.friction_work, new.time = old.work, old.friction_work, old.time
                 if old is self.old.inter:
                     self._inter_from_node_pairs(new, rows)
             else:

@@ -407,7 +407,7 @@ def growth_series(built, name, f) -> dict:
         s2, n2 = np.sum(ds[soft] ** 2, axis=1), np.maximum(dn[soft], 0.0) ** 2
         return float(np.sum(bonds.area[soft] * s2) / np.sum(bonds.area[soft] * (s2 + n2)))
     return {"growth_left": lambda: run(-1), "growth_right": lambda: run(+1), "tip_mode_ratio": mode_ratio,
-            "interface_dissipated": bonds.dissipated_energy}
+            "interface_dissipated": bonds.decohesion_energy}
 
 
 def film_critical_strain(h: dict, h_sub: float) -> float:
