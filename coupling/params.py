@@ -61,13 +61,11 @@ class Param:
         quoted number is most often a slip); text from --set is parsed.
         """
         bad = CaseError(f"{key} = {value!r}: expected {self.allowed()}")
+        if typed and isinstance(value, str) and self.kind != "str":
+            raise CaseError(f"{key} = {value!r}: expected {self.allowed()} (unquoted in a case file)")
         if self.kind == "table":
-            if typed and isinstance(value, str):
-                raise CaseError(f"{key} = {value!r}: expected {self.allowed()} (unquoted in a case file)")
             return _table(value, bad)
         if isinstance(value, str) and self.kind != "str":
-            if typed:
-                raise CaseError(f"{key} = {value!r}: expected {self.allowed()} (unquoted in a case file)")
             value = _parse_scalar(value)
         if typed and self.kind == "int" and isinstance(value, float):
             raise CaseError(f"{key} = {value!r}: expected {self.allowed()} (no decimal point in a case file)")

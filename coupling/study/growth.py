@@ -99,10 +99,12 @@ _BOND_ROWS = ("damage", "delta", "traction", "t_failed", "force")
 
 
 def _carry_bonds(new, old, rows: np.ndarray, law_rows: bool = True) -> None:
-    """New LawBonds' rows ``rows >= 0`` set to the old bonds' state there."""
+    """New LawBonds' rows ``rows >= 0`` set to the old bonds' state there, and their ledger (the
+    work done so far, the friction's share, the time) the old one's."""
     at, src = np.flatnonzero(rows >= 0), rows[rows >= 0]
     for k in _BOND_ROWS:
         getattr(new, k)[at] = getattr(old, k)[src]
+    new.work, new.friction_work, new.time = old.work, old.friction_work, old.time
     if law_rows:
         for k in ("m0", "mf", "crushed"):
             if hasattr(new.law, k) and hasattr(old.law, k):
@@ -483,8 +485,6 @@ class _Transfer:
             return
         rows = _bond_map(old[0].bonds.pairs, new[0].bonds.pairs, node)
         _carry_bonds(new[0].bonds, old[0].bonds, rows)
-        new[0].bonds.work, new[0].bonds.time = old[0].bonds.work, old[0].bonds.time
-        new[0].bonds.friction_work = old[0].bonds.friction_work
         new[0].last = old[0].last
 
     def _carry_models(self, models, was: np.ndarray, x: np.ndarray) -> None:
@@ -495,7 +495,6 @@ class _Transfer:
                 _carry_bonds(new, old, rows)
                 if hasattr(new.law, "snapback"):
                     new.law.snapback = old.law.snapback
-                new.work, new.friction_work, new.time = old.work, old.friction_work, old.time
                 if old is self.old.inter:
                     self._inter_from_node_pairs(new, rows)
             else:

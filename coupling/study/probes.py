@@ -390,7 +390,8 @@ PROBES: dict[str, ProbeKind] = {
                  "max_interpenetration", "tip_energy_release_rate")),
     "delamination_growth": ProbeKind(
         "a panel's delamination growth in the DEM windows (coupled): growth_left / growth_right, tip_mode_ratio, "
-        "interface_dissipated (by decohesion: friction kept apart); qoi delamination_growth_left / _right, delamination_length_at_limit_load, "
+        "interface_dissipated (by decohesion: friction kept apart); qoi delamination_growth_left / _right, "
+        "delamination_length_at_limit_load, "
         "growth_onset_load and its closed form (Hutchinson & Suo for the measured mode mix), "
         "dissipated_per_new_area, growth_reached_window_edge (panels)",
         {}, growth_series, growth_qoi, with_params=True,
