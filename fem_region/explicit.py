@@ -12,12 +12,14 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
+import scipy.sparse as sp
 
 from .bulk_viscosity import BulkViscosity
 from .kernels import add_first_columns, axpy, divide_rows, scale_rows, kinetic_energy as nodal_kinetic_energy
 from physics.impactor import RigidImpactor
 from physics.kernels import add_at, ball_on_nodes
 from .region import FemRegion
+from .stable_step import assembled_critical_dt
 
 TimeFunction = Callable[[float], float]
 
@@ -102,7 +104,9 @@ class ExplicitDynamics:
     # forces of models between nodes (e.g. cohesive bonds joining two meshes): callables
     # giving (n_nodes, dim) N at the current state; their energy is the models' to report
     node_forces: list = field(default_factory=list)
-    critical_dt_extra: float = np.inf  # s, stable step those models allow
+    # (ndof, ndof) N/m, the stiffest those models get as springs between nodes (add_springs):
+    # part of the assembled stable step
+    springs: sp.spmatrix | None = None
 
     def __post_init__(self):
         r = self.region
@@ -153,9 +157,16 @@ class ExplicitDynamics:
         self.state.v[:] = v
         self.ledger.kinetic = self.kinetic_energy()
 
+    def add_springs(self, K: sp.spmatrix) -> None:
+        """Add K (ndof, ndof) N/m, springs between nodes at their stiffest, to the stable step."""
+        self.springs = K if self.springs is None else self.springs + K
+
     def critical_dt(self) -> float:
-        """Stable step (s) including the stiffness-proportional damping reduction."""
-        dt = min(self.region.critical_dt(self.density_scale), self.critical_dt_extra)
+        """Stable step (s) of the assembled model (the elements' stiffness with the springs, the
+        nodes' masses with what mass scaling and ties add: fem_region.stable_step), within the
+        impactors' own limit, reduced for stiffness-proportional damping."""
+        K = self.region.K if self.springs is None else self.region.K + self.springs
+        dt = assembled_critical_dt(K, self.m, self.region.dim)
         for imp in self.impactors:
             dt = min(dt, imp.critical_dt(self.m[self._surface]))
         if self.beta > 0:

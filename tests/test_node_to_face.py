@@ -2,8 +2,8 @@
 blocks meshed independently and joined across their common plane by the interlaminar law.
 Checked against their own geometry: the points reproduce every affine field (so a rigid motion of
 any size gives no force), a uniform opening and slip give each slave its tributary area times
-K delta, forces sum to zero, and an undamped vibration keeps its energy at the stable step the
-bonds' Gershgorin bound gives."""
+K delta, forces sum to zero, and an undamped vibration keeps its energy at the stable step of
+elements and bonds assembled."""
 from __future__ import annotations
 
 import numpy as np
@@ -132,7 +132,7 @@ def vibrate(r, face, share: float, duration: float) -> tuple[float, float, float
         dyn.kick(dt)
         e = energies()
         worst = max(worst, abs(e["kinetic"] + e["internal"] - e0))
-    return worst / e0, bonds.dissipated_energy() / e0, dyn.critical_dt() / r.critical_dt(None)
+    return worst / e0, bonds.dissipated_energy() / e0, dyn.critical_dt() / ExplicitDynamics(r).critical_dt()
 
 
 @pytest.mark.parametrize("element, n_lower, n_upper", [("quad4", (7,), (4,)), ("tri3", (3,), (8,)),
@@ -141,8 +141,11 @@ def test_an_undamped_vibration_keeps_its_energy_and_is_stable_at_the_bound_step(
     """The energy error of velocity Verlet falls as dt^2 when the forces are the gradient of
     the energy: over 150 stable steps, a quarter and an eighth of the step give errors 4 x
     apart (a force that is not the gradient would leave a drift that does not fall so). At
-    0.98 of the step (elements and bonds, Gershgorin) the energy stays within 5 % over 6000
-    steps: stable (an unstable mode grows without bound). No energy is dissipated."""
+    0.98 of the step (elements and bonds assembled: fem_region.stable_step) the energy stays
+    within 10 % over 6000 steps (the fastest modes' energy measured at whole steps swings
+    near the limit, bounded: 6.0 % at 3,000 steps and 6.4 % at 24,000 on the quad4 blocks);
+    at 1.02 of it the energy grows past 1e3 x: the step is the limit itself. No energy is
+    dissipated."""
     m, lower, upper, axis = blocks(element, n_lower, n_upper)
     r = region(m, element)
     face = node_to_face(m.p, m.t, lower, upper, axis, H, 1e-9)
@@ -152,4 +155,5 @@ def test_an_undamped_vibration_keeps_its_energy_and_is_stable_at_the_bound_step(
     assert 3.4 <= coarse / fine <= 4.6
     assert coarse <= 5e-3
     assert abs(lost) <= 1e-6
-    assert vibrate(r, face, 0.98, 6000)[0] <= 0.05
+    assert vibrate(r, face, 0.98, 6000)[0] <= 0.1
+    assert vibrate(r, face, 1.02, 600)[0] > 1e3

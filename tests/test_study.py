@@ -600,7 +600,8 @@ def test_a_cohesive_far_field_of_triangles_holds_until_it_fails_and_then_dissipa
     with its interfaces out of reach the plies meshed apart and joined by the law's node pairs
     bend as plies sharing their nodes (peak deflection within 1 %); struck at 15 m/s without
     friction its interfaces debond, dissipating between GIc x the debonded area and GIIc x the
-    damaged area; the ledger closed in both."""
+    damaged area; the ledger closed in both (struck, its error is the step's: it falls about 4 x
+    at half the step, 2.1 x from the elements' bound to the assembled step, 1.41 x longer)."""
     tri = f"--set=mesh.file={_triangulated(tmp_path / 'tri.msh')}"
     peaks = []
     for far in ("tied", "cohesive"):
@@ -611,10 +612,14 @@ def test_a_cohesive_far_field_of_triangles_holds_until_it_fails_and_then_dissipa
         assert s["counts"]["fem_elements"] == 2 * _file_elements(0.0)
         peaks.append(s["qoi"]["peak_deflection"])
     assert abs(peaks[1] / peaks[0] - 1) < 0.01, peaks
-    code, s, err = femdem("run", str(GMSH), "--mode", "fem", tri, COHESIVE, "--set=impactors.striker.velocity=15",
-                          "--set=interfaces.epoxy.friction=0", "--set=impactors.striker.friction=0")
-    assert code == 0, err
-    assert s["energy"]["balance_error_rel"] < 1e-3
+    errors = []
+    for safety in (0.45, 0.9):
+        code, s, err = femdem("run", str(GMSH), "--mode", "fem", tri, COHESIVE, "--set=impactors.striker.velocity=15",
+                              "--set=interfaces.epoxy.friction=0", "--set=impactors.striker.friction=0",
+                              f"--set=clock.safety={safety}")
+        assert code == 0, err
+        errors.append(s["energy"]["balance_error_rel"])
+    assert errors[1] < 5e-3 and 3.0 < errors[1] / errors[0] < 5.3, errors
     _dissipation_within_the_toughness_bounds(s, "epoxy", s["parameters"]["zone.plies_per_particle"] * 0.2e-3)
 
 

@@ -10,6 +10,7 @@ from fem_region.elements import ELEMENTS
 from fem_region.explicit import ExplicitDynamics
 from fem_region.kernels import add_columns, face_forces, face_points
 from fem_region.region import FORMULATIONS, INTEGRATIONS, FemRegion
+from fem_region.stable_step import spring_stiffness
 
 from ..params import CaseError, Param
 from ..simulation import FieldFrame, Simulation, Stage
@@ -192,10 +193,10 @@ class NodeBondForces:
 def cohesive_node_bonds(dyn: ExplicitDynamics, pairs: np.ndarray, area: np.ndarray, law, friction: float):
     """LawBonds joining coincident FEM nodes across a ply interface (a cohesive far field):
     pairs (k, 2) lower / upper node, area (k,) m^2 each pair stands for; evaluated on the nodes
-    at each force evaluation. The FEM's stable step becomes that of elements and pairs together:
-    a pair's spring adds to its nodes' elements, so omega^2 <= omega_el^2 + 4 k / m (the largest
-    eigenvalue of a sum is at most the sum of the largest; the elements' own step alone, or the
-    pairs' alone, is not a bound: a DCB with pairs at the elements' limit blew up in 220 steps)."""
+    at each force evaluation. The FEM's stable step becomes that of elements and pairs together,
+    each pair a spring of its penalty along every axis (fem_region.stable_step; the elements' own
+    step alone, or the pairs' alone, is not a bound: a DCB with pairs at the elements' limit blew
+    up in 220 steps)."""
     from physics.law_bonds import LawBonds
     # coincident nodes: the bond normal is the laminate's (+y in a 2D slice, +z in 3D, from the
     # lower ply); positions padded to 3D as FemNodes gives them
@@ -205,10 +206,8 @@ def cohesive_node_bonds(dyn: ExplicitDynamics, pairs: np.ndarray, area: np.ndarr
     bonds = LawBonds(pairs, np.pad(dyn.region.X, ((0, 0), (0, 3 - dim))), normal, area, law, friction=friction,
                      label="interlaminar")
     dyn.node_forces = [FemNodes(dyn).model(bonds, dyn)]
-    k_bond = law.K * area
-    m_pair = np.minimum(dyn.m[pairs[:, 0]], dyn.m[pairs[:, 1]])
-    omega_el = 2.0 / dyn.region.critical_dt(dyn.density_scale)
-    dyn.critical_dt_extra = float(2.0 / np.sqrt(omega_el**2 + np.max(4 * k_bond / np.maximum(m_pair, 1e-300))))
+    dyn.add_springs(spring_stiffness(dyn.region.n_nodes, dim, pairs, np.tile([1.0, -1.0], (len(pairs), 1)),
+                                     law.K * np.asarray(area, float)))
     return bonds
 
 
@@ -219,9 +218,8 @@ def node_to_face_bonds(dyn: ExplicitDynamics, face, area: np.ndarray, law, frict
     evaluated on FaceNodes at each force evaluation. Each bond runs from its slave to its point
     (pairs[:, 0] is a node on the plane), its normal along the laminate's (y in 2D, z in 3D)
     pointing there: the opening is the two sides' separation either way. The stable step is
-    that of elements and bonds together, as cohesive_node_bonds: by Gershgorin, a bond of
-    stiffness k adds 2 k to its slave's row and 2 k w_a to each face node's (the coupling
-    vector (1, -w) has |1| + sum w = 2), doubled as there."""
+    that of elements and bonds together, as cohesive_node_bonds: a bond is a spring k on its
+    slave less its point, u_s - sum_a w_a u_a."""
     from physics.law_bonds import LawBonds
     n, dim, k = dyn.region.n_nodes, dyn.region.dim, len(face.slave)
     X = np.pad(dyn.region.X, ((0, 0), (0, 3 - dim)))
@@ -232,11 +230,8 @@ def node_to_face_bonds(dyn: ExplicitDynamics, face, area: np.ndarray, law, frict
     normal[:, dim - 1] = np.where(face.slave_above, -1.0, 1.0)
     bonds = LawBonds(pairs, X, normal, area, law, friction=friction, label="interlaminar")
     dyn.node_forces = [FaceNodes(dyn, face).model(bonds, dyn)]
-    k_bond = law.K * bonds.area
-    row = np.bincount(face.slave, 2 * k_bond, minlength=n)
-    row += np.bincount(face.nodes.ravel(), (2 * k_bond[:, None] * face.weights).ravel(), minlength=n)
-    omega_el = 2.0 / dyn.region.critical_dt(dyn.density_scale)
-    dyn.critical_dt_extra = float(2.0 / np.sqrt(omega_el**2 + np.max(2 * row / dyn.m)))
+    dyn.add_springs(spring_stiffness(n, dim, np.column_stack([face.slave, face.nodes]),
+                                     np.column_stack([np.ones(k), -face.weights]), law.K * bonds.area))
     return bonds
 
 

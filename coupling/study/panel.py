@@ -39,6 +39,7 @@ from dem_region.scene import DemScene
 from fem_region import materials, mesh
 from fem_region.explicit import ExplicitDynamics, PrescribedMotion
 from fem_region.modal import lowest_modes
+from fem_region.stable_step import spring_stiffness
 from physics.law_bonds import LawBonds
 from physics.laws import HashinCohesiveLaw
 
@@ -329,7 +330,8 @@ def face_contact(p: dict, g: Panel, dyn: ExplicitDynamics, X0: np.ndarray, upper
     """Frictionless node-to-node penalty contact across the delamination: each doubled node
     pair on the crack line (lower i, upper j) is a fully debonded Hashin bond, which pushes
     back only in compression, measured from the flat (imperfection-free) faces so the gap is
-    the real one. Area: the pair's tributary length x width. Sets the FEM's extra stable step."""
+    the real one. Area: the pair's tributary length x width. Its springs enter the FEM's
+    stable step (fem_region.stable_step)."""
     tol = 1e-9 * np.ptp(X0[1])
     on = np.flatnonzero(np.abs(X0[1] - g.yc) < tol)
     xs = np.round(X0[0, on] / tol)
@@ -343,7 +345,7 @@ def face_contact(p: dict, g: Panel, dyn: ExplicitDynamics, X0: np.ndarray, upper
     x = X0[0, pairs[:, 0]]
     edges = np.concatenate([[x[0] - 0.5 * (x[1] - x[0])], 0.5 * (x[1:] + x[:-1]), [x[-1] + 0.5 * (x[-1] - x[-2])]])
     area = np.diff(edges) * g.b
-    m_pair = np.minimum(dyn.m[pairs[:, 0]], dyn.m[pairs[:, 1]])  # Gershgorin on the lighter node
+    m_pair = np.minimum(dyn.m[pairs[:, 0]], dyn.m[pairs[:, 1]])  # the penalty no stiffer than the lighter node allows
     dt_elements = dyn.region.critical_dt(dyn.density_scale)
     K = p[f"{g.delamination}.penalty"] or min(g.E22 / (g.h / p["mesh.elements_sublaminate"]),
                                               float(np.min(m_pair / area)) / dt_elements**2)
@@ -353,7 +355,9 @@ def face_contact(p: dict, g: Panel, dyn: ExplicitDynamics, X0: np.ndarray, upper
     bonds = LawBonds(pairs, X3, np.tile([0.0, 1.0, 0.0], (len(pairs), 1)), area, law, label="delamination")
     bonds.damage[:] = 1.0
     dyn.node_forces = [FemNodes(dyn).model(bonds, dyn)]
-    dyn.critical_dt_extra = float(np.min(2.0 / np.sqrt(4 * K * area / m_pair)))
+    # the penalty as springs along every axis (it pushes along the normal only: a safe excess)
+    dyn.add_springs(spring_stiffness(dyn.region.n_nodes, dyn.region.dim, pairs,
+                                     np.tile([1.0, -1.0], (len(pairs), 1)), K * area))
     return bonds
 
 
