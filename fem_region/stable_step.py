@@ -38,6 +38,11 @@ def spring_stiffness(n_nodes: int, dim: int, nodes: np.ndarray, coef: np.ndarray
                          shape=(n_nodes * dim, n_nodes * dim))
 
 
+def pair_springs(n_nodes: int, dim: int, pairs: np.ndarray, k: np.ndarray) -> sp.csr_matrix:
+    """spring_stiffness of springs k (nb,) N/m on node pairs (nb, 2)."""
+    return spring_stiffness(n_nodes, dim, pairs, np.tile([1.0, -1.0], (len(pairs), 1)), k)
+
+
 def largest_frequency_squared(K: sp.spmatrix, m: np.ndarray, dim: int) -> float:
     """omega_max^2 (1/s^2) of K (n dim, n dim) N/m with lumped masses m (n,) kg (massless
     DOFs, which carry no inertia, are left out)."""

@@ -10,7 +10,7 @@ from fem_region.elements import ELEMENTS
 from fem_region.explicit import ExplicitDynamics
 from fem_region.kernels import add_columns, face_forces, face_points
 from fem_region.region import FORMULATIONS, INTEGRATIONS, FemRegion
-from fem_region.stable_step import spring_stiffness
+from fem_region.stable_step import pair_springs, spring_stiffness
 
 from ..params import CaseError, Param
 from ..simulation import FieldFrame, Simulation, Stage
@@ -206,8 +206,7 @@ def cohesive_node_bonds(dyn: ExplicitDynamics, pairs: np.ndarray, area: np.ndarr
     bonds = LawBonds(pairs, np.pad(dyn.region.X, ((0, 0), (0, 3 - dim))), normal, area, law, friction=friction,
                      label="interlaminar")
     dyn.node_forces = [FemNodes(dyn).model(bonds, dyn)]
-    dyn.add_springs(spring_stiffness(dyn.region.n_nodes, dim, pairs, np.tile([1.0, -1.0], (len(pairs), 1)),
-                                     law.K * np.asarray(area, float)))
+    dyn.add_springs(pair_springs(dyn.region.n_nodes, dim, pairs, law.K * np.asarray(area, float)))
     return bonds
 
 

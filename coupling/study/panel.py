@@ -39,7 +39,7 @@ from dem_region.scene import DemScene
 from fem_region import materials, mesh
 from fem_region.explicit import ExplicitDynamics, PrescribedMotion
 from fem_region.modal import lowest_modes
-from fem_region.stable_step import spring_stiffness
+from fem_region.stable_step import pair_springs
 from physics.law_bonds import LawBonds
 from physics.laws import HashinCohesiveLaw
 
@@ -356,8 +356,7 @@ def face_contact(p: dict, g: Panel, dyn: ExplicitDynamics, X0: np.ndarray, upper
     bonds.damage[:] = 1.0
     dyn.node_forces = [FemNodes(dyn).model(bonds, dyn)]
     # the penalty as springs along every axis (it pushes along the normal only: a safe excess)
-    dyn.add_springs(spring_stiffness(dyn.region.n_nodes, dyn.region.dim, pairs,
-                                     np.tile([1.0, -1.0], (len(pairs), 1)), K * area))
+    dyn.add_springs(pair_springs(dyn.region.n_nodes, dyn.region.dim, pairs, K * area))
     return bonds
 
 
