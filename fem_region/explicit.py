@@ -107,6 +107,8 @@ class ExplicitDynamics:
     # (ndof, ndof) N/m, the stiffest those models get as springs between nodes (add_springs):
     # part of the assembled stable step
     springs: sp.spmatrix | None = None
+    # s, a limit of the step those models set themselves (e.g. their dampers': pair_step_limit)
+    spring_dt_limit: float = np.inf
 
     def __post_init__(self):
         r = self.region
@@ -157,14 +159,17 @@ class ExplicitDynamics:
         self.state.v[:] = v
         self.ledger.kinetic = self.kinetic_energy()
 
-    def add_springs(self, K: sp.spmatrix) -> None:
-        """Add K (ndof, ndof) N/m, springs between nodes at their stiffest, to the stable step."""
+    def add_springs(self, K: sp.spmatrix, limit: float = np.inf) -> None:
+        """Add K (ndof, ndof) N/m, springs between nodes at their stiffest, to the stable step;
+        ``limit`` (s): a step they must not exceed on their own account."""
         self.springs = K if self.springs is None else self.springs + K
+        self.spring_dt_limit = min(self.spring_dt_limit, limit)
 
     def critical_dt(self) -> float:
         """Stable step (s) of the assembled model (the elements' stiffness with the springs, the
         nodes' masses with what mass scaling and ties add: fem_region.stable_step), within the
-        impactors' own limit, reduced for stiffness-proportional damping."""
+        impactors' own limit and the springs' (spring_dt_limit), reduced for stiffness-proportional
+        damping."""
         K = self.region.K if self.springs is None else self.region.K + self.springs
         dt = assembled_critical_dt(K, self.m, self.region.dim)
         for imp in self.impactors:
@@ -173,7 +178,7 @@ class ExplicitDynamics:
             w = 2.0 / dt
             xi = 0.5 * self.beta * w
             dt = 2.0 / w * (np.sqrt(1 + xi * xi) - xi)
-        return dt
+        return min(dt, self.spring_dt_limit)
 
     def external_force(self, t: float, out: np.ndarray) -> np.ndarray:
         """``out`` (n_nodes, dim) N <- the loads at time t (s), returned itself (the step tells its

@@ -59,7 +59,10 @@ class LawBonds:
     lattice cell of each particle, needed by laws that initiate on the particle stress
     (PlyBondLaw: Love-Weber stress of the law bonds' forces); friction: Coulomb coefficient on
     failed bonds in compression; v_reg: m/s, friction regularisation; scale: factor on the
-    reported energies (slice thickness -> full width); label: family name in outputs."""
+    reported energies (slice thickness -> full width); label: family name in outputs;
+    damping: (nb,) Pa s/m, a damper on each bond's opening rate while it has softened and not
+    failed, at contact (in compression now or at the last step) (None: none): the ringing
+    control of penalty pairs (participants.fem.pair_damping)."""
 
     pairs: np.ndarray
     X: np.ndarray
@@ -72,6 +75,7 @@ class LawBonds:
     v_reg: float = 1e-3
     label: str = "interlaminar"
     finite_rotation: bool = False  # corotated kinematics (module docstring)
+    damping: np.ndarray | None = None
 
     def __post_init__(self):
         self.pairs = np.asarray(self.pairs, int).reshape(-1, 2)
@@ -79,6 +83,8 @@ class LawBonds:
         self.normal = np.asarray(self.normal, float).reshape(nb, 3)
         self.normal = self.normal / np.linalg.norm(self.normal, axis=1)[:, None]
         self.area = np.broadcast_to(np.asarray(self.area, float), (nb,)).copy()
+        self.damping = np.zeros(nb) if self.damping is None else \
+            np.broadcast_to(np.asarray(self.damping, float), (nb,)).copy()
         self.ids, inverse = np.unique(self.pairs, return_inverse=True)
         self._loc = inverse.reshape(-1, 2)  # bond end -> row of self.ids
         X = np.asarray(self.X, float)
@@ -88,6 +94,7 @@ class LawBonds:
         self.traction = np.zeros((nb, 3))  # Pa
         self.work = 0.0  # J, work of the bond forces on the separations (slice)
         self.friction_work = 0.0  # J, its share done by the tangential tractions of failed bonds
+        self.damping_work = 0.0  # J, its share done by the dampers
         self.t_failed = np.full(nb, np.nan)  # s, when each bond reached full decohesion
         self.force = np.zeros((nb, 3))  # N on each bond's second particle at the last evaluation
         self.time = 0.0
@@ -154,6 +161,13 @@ class LawBonds:
                 tn = dn[closed] * np.broadcast_to(self.law.K, dn.shape)[closed]
                 # the bond traction acts on the second particle as -A t: friction against its slip
                 t[closed] = tn[:, None] * self.normal[closed] - friction_traction(tn, rate, self.friction, self.v_reg)
+        if dt > 0 and self.damping.any():  # the dampers of softened bonds at contact
+            dn, dn_old = np.einsum("bi,bi->b", delta, self.normal), np.einsum("bi,bi->b", self.delta, self.normal)
+            rate = dn - dn_old
+            on = (d > 0) & (d < 1) & ((dn < 0) | (dn_old < 0)) & (self.damping > 0)
+            q = np.where(on, self.damping / dt * rate, 0.0)
+            t = t + q[:, None] * self.normal
+            self.damping_work += float(self.area @ (q * rate))
         newly = failed & ~(self.damage >= 1.0)
         self.time += dt
         self.t_failed[newly] = self.time
@@ -254,17 +268,18 @@ class LawBonds:
         P, law = self._plan, self.law
         self.time += dt
         ply = P.law == law_kernels.PLY
-        work, fwork, snap = P.bonds_pass(
+        work, fwork, vwork, snap = P.bonds_pass(
             x, end, P.loc, self.d0, self.normal, self.area, P.K,
             P.kin, P.X_mid, P.dir_a, P.dir_b, P.dir_e, P.dir_h, P.un, P.s0, P.L0, P.axis, P.local, P.rot, P.chord,
             P.law, P.hp, P.pstress, P.inc_ptr, P.inc_bond, P.cell, P.axes, P.aligned, P.ply_axes,
             law.strength_scale if ply else P.none, P.hk, P.Gf,
             law.m0 if ply else P.none, law.mf if ply else P.none, law.index if ply else P.none,
             law.crushed if ply else P.no,
-            float(self.friction), float(self.v_reg), float(dt), self.time,
+            float(self.friction), float(self.v_reg), self.damping, float(dt), self.time,
             self.damage, self.delta, self.traction, self.t_failed, P.slots, P.active)
         self.work += work
         self.friction_work += fwork
+        self.damping_work += vwork
         if snap:
             law.snapback += int(snap)
         if between_passes is not None:
@@ -316,8 +331,8 @@ class LawBonds:
 
     def decohesion_energy(self) -> float:
         """J, what decohesion alone dissipated so far (slice): the dissipation less the friction
-        of closed failed faces."""
-        return self.dissipated_energy() - self.friction_work
+        of closed failed faces and the dampers'."""
+        return self.dissipated_energy() - self.friction_work - self.damping_work
 
     def force_on(self, particles: np.ndarray) -> np.ndarray:
         """(3,) N, total bond force on the set ``particles`` at the last evaluation."""
@@ -336,7 +351,8 @@ class LawBonds:
 
     def checkpoint_state(self) -> dict:
         d = {"damage": self.damage, "delta": self.delta, "traction": self.traction, "work": self.work,
-             "friction_work": self.friction_work, "t_failed": self.t_failed, "time": self.time}
+             "friction_work": self.friction_work, "damping_work": self.damping_work, "t_failed": self.t_failed,
+             "time": self.time}
         for k in _LAW_STATE:
             if hasattr(self.law, k):
                 d["law_" + k] = getattr(self.law, k)
@@ -347,6 +363,7 @@ class LawBonds:
             setattr(self, k, np.array(d[k], float))
         self.work, self.time = float(d["work"]), float(d["time"])
         self.friction_work = float(d.get("friction_work", 0.0))  # (0 in a checkpoint written before it)
+        self.damping_work = float(d.get("damping_work", 0.0))
         for k in _LAW_STATE:
             if "law_" + k in d:
                 v = np.array(d["law_" + k])

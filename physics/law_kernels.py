@@ -51,7 +51,7 @@ FIXED, CENTRAL, FRAME_2D = 0, 1, 2  # kinematics: fixed normal, corotated centra
 def _bonds_pass(x, end, loc, d0, normal, area, Kb,
                kin, X_mid, dir_a, dir_b, dir_e, dir_h, un, s0, L0, axis, local, rot, chord,
                law, hp, pstress, inc_ptr, inc_bond, cell, axes, aligned, ply_axes, scale, hk, Gf, m0, mf, index, crushed,
-               friction, v_reg, dt, time, damage, delta, traction, t_failed, slots, active):
+               friction, v_reg, visc, dt, time, damage, delta, traction, t_failed, slots, active):
     """One step of the bonds ``active`` (indices into nb bonds: all of them, or the share one
     MPI rank evaluates; the others' rows are left as they are). x (N, 3) m positions; end (nb, 2) rows of the bond ends in x;
     loc (nb, 2) the same ends as rows of the bonds' own particle list (pstress, cell);
@@ -65,12 +65,13 @@ def _bonds_pass(x, end, loc, d0, normal, area, Kb,
     scratch (Love-Weber stress, Voigt Pa), each particle's bonds inc_bond[inc_ptr[p]:inc_ptr[p + 1]] in bond order, cell (np,) m^3, distinct ply axes (a, 3, 3) and each bond's ply_axes (nb,), scale (nb,),
     hk = kernels.hoffman_coefficients(strengths),
     Gf (nb, c) J/m^2, state m0, mf, index (nb,) (of the bonds not yet initiated), crushed (nb,)
-    bool updated.
+    bool updated. visc (nb,) Pa s/m: each bond's damper (LawBonds.damping).
     State updated in place: damage (nb,), delta, traction (nb, 3), t_failed (nb,) s; slots
     (nb, S, 3) N: 0 the force on the second end (its first end takes minus it), then per tangent
     the vector on each particle of the next pair b and of the previous pair a. Returns (work of
-    this step J, the friction's share of it J, new snapbacks): the friction's, the work of the
-    tangential tractions of failed bonds (their normal one is the contact's penalty)."""
+    this step J, the friction's share of it J, the dampers' J, new snapbacks): the friction's, the
+    work of the tangential tractions of failed bonds (their normal one is the contact's penalty);
+    the dampers', their traction times the separation's increment."""
     nb = end.shape[0]
     ndir = dir_a.shape[0]
     if kin == FIXED and ndir > 0:  # the pairs' mean normal displacement, for the slope terms
@@ -105,6 +106,7 @@ def _bonds_pass(x, end, loc, d0, normal, area, Kb,
                 0.5 * (s01 + s10) / v
     work = 0.0
     fwork = 0.0
+    vwork = 0.0
     snapbacks = 0
     for a_ in prange(active.shape[0]):
         m = active[a_]
@@ -180,6 +182,11 @@ def _bonds_pass(x, end, loc, d0, normal, area, Kb,
             tn = dn * Kb[m]
             mu_p = friction * max(-tn, 0.0) / np.sqrt(v0 * v0 + v1 * v1 + v2 * v2 + v_reg * v_reg)
             t0, t1, t2 = tn * n0 + mu_p * v0, tn * n1 + mu_p * v1, tn * n2 + mu_p * v2
+        on = o0 * n0 + o1 * n1 + o2 * n2
+        if visc[m] > 0.0 and dt > 0 and 0.0 < d < 1.0 and (dn < 0 or on < 0):  # softened, at contact
+            q = visc[m] / dt * (dn - on)  # the damper on the opening's rate
+            t0, t1, t2 = t0 + q * n0, t1 + q * n1, t2 + q * n2
+            vwork += area[m] * q * (dn - on)
         if d >= 1.0 and not d_old >= 1.0:
             t_failed[m] = time
         work += area[m] * ((r0 + t0) * (g0 - o0) + (r1 + t1) * (g1 - o1) + (r2 + t2) * (g2 - o2))
@@ -216,7 +223,7 @@ def _bonds_pass(x, end, loc, d0, normal, area, Kb,
                 for k in range(3):
                     slots[m, 1 + 2 * t, k] = -q * normal[b, k]
                     slots[m, 2 + 2 * t, k] = q * normal[a, k]
-    return 0.5 * work, 0.5 * fwork, snapbacks
+    return 0.5 * work, 0.5 * fwork, vwork, snapbacks
 
 
 @kernel

@@ -111,8 +111,9 @@ def test_a_uniform_opening_and_slip_load_each_slave_by_its_area(spec, opening, s
 def vibrate(r, face, share: float, duration: float) -> tuple[float, float, float]:
     """Both blocks of ``r`` joined by ``face`` start with a velocity field that strains the
     interface, the penalty at the elements' limit (cohesive_penalty with face_pair_mass), and
-    run for ``duration`` (in stable steps) at ``share`` of the stable step; (largest |energy
-    change| / start, the bonds' dissipation / start, the stable step / the elements' own)."""
+    run for ``duration`` (in stable steps) at ``share`` of the stable step (intact bonds: their
+    dampers never act); (largest |energy change| / start, the bonds' dissipation / start, the
+    stable step / the elements' own)."""
     dyn = ExplicitDynamics(r)
     K = cohesive_penalty(dyn, None, face.area, 1e20, face_pair_mass(dyn, face))
     bonds = node_to_face_bonds(dyn, face, face.area, law(K), 0.0)

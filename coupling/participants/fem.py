@@ -190,10 +190,38 @@ class NodeBondForces:
         self.last = float(d["last"])
 
 
+# The dampers of the FEM's pairs (pair_damping). A pair that has softened is a bilinear spring,
+# K in compression, (1 - d) K in opening; under central differences such a spring rings inside
+# the linear stable step (a single pair of masses grows a millionfold in resonance tongues from
+# omega_p dt = 0.44, omega_p^2 = K A / mu its own mode; docs/status.md, session 42), and the seed
+# beam's softened lower interface chattered at the zone's edge. A damper of 10 % of the pair's
+# critical damping on the opening's rate, acting only on softened pairs at contact (where the
+# stiffness switches), holds the single pair decaying up to omega_p dt = 1.6 (PAIR_RING_LIMIT:
+# tests/test_pair_damping.py) and leaves intact and opening pairs undamped (a damper on every
+# pair's whole separation rate moved the seed beam's delamination to the other interface).
+PAIR_DAMPING = 0.1
+PAIR_RING_LIMIT = 1.6
+
+
+def pair_damping(K: float, area: np.ndarray, mu: np.ndarray, xi: float = PAIR_DAMPING) -> np.ndarray:
+    """(k,) Pa s/m per area: dampers of ratio xi on each pair's own mode, a spring K area (N/m)
+    between masses of reduced mass mu (k,) kg: c = 2 xi sqrt(K A mu) N s/m."""
+    area = np.asarray(area, float)
+    return 2.0 * xi * np.sqrt(K * np.asarray(mu, float) / area)
+
+
+def pair_step_limit(K: float, area: np.ndarray, mu: np.ndarray) -> float:
+    """s, the step below which every damped pair decays (omega_p dt <= PAIR_RING_LIMIT). Below
+    the elements' own step wherever the pairs are stiffer than the elements allow (a penalty
+    capped by cohesive_penalty has omega_p <= omega_el / sqrt 2, and never binds)."""
+    return float(PAIR_RING_LIMIT / np.sqrt(np.max(K * np.asarray(area, float) / np.asarray(mu, float))))
+
+
 def cohesive_node_bonds(dyn: ExplicitDynamics, pairs: np.ndarray, area: np.ndarray, law, friction: float):
     """LawBonds joining coincident FEM nodes across a ply interface (a cohesive far field):
     pairs (k, 2) lower / upper node, area (k,) m^2 each pair stands for; evaluated on the nodes
-    at each force evaluation. The FEM's stable step becomes that of elements and pairs together,
+    at each force evaluation, each with its damper (pair_damping). The FEM's stable step becomes
+    that of elements and pairs together (within the dampers' own limit, pair_step_limit),
     each pair a spring of its penalty along every axis (fem_region.stable_step; the elements' own
     step alone, or the pairs' alone, is not a bound: a DCB with pairs at the elements' limit blew
     up in 220 steps)."""
@@ -203,10 +231,13 @@ def cohesive_node_bonds(dyn: ExplicitDynamics, pairs: np.ndarray, area: np.ndarr
     dim = dyn.region.dim
     normal = np.zeros((len(pairs), 3))
     normal[:, dim - 1] = 1.0
+    m1, m2 = dyn.m[pairs[:, 0]], dyn.m[pairs[:, 1]]
+    mu = m1 * m2 / (m1 + m2)
     bonds = LawBonds(pairs, np.pad(dyn.region.X, ((0, 0), (0, 3 - dim))), normal, area, law, friction=friction,
-                     label="interlaminar")
+                     label="interlaminar", damping=pair_damping(law.K, area, mu))
     dyn.node_forces = [FemNodes(dyn).model(bonds, dyn)]
-    dyn.add_springs(pair_springs(dyn.region.n_nodes, dim, pairs, law.K * np.asarray(area, float)))
+    dyn.add_springs(pair_springs(dyn.region.n_nodes, dim, pairs, law.K * np.asarray(area, float)),
+                    limit=pair_step_limit(law.K, area, mu))
     return bonds
 
 
@@ -214,7 +245,7 @@ def node_to_face_bonds(dyn: ExplicitDynamics, face, area: np.ndarray, law, frict
     """LawBonds joining a ply interface meshed independently on its two sides (``face``:
     fem_region.node_to_face.NodeToFace; area (k,) m^2 each slave stands for: face.area, times
     the slice's thickness in 2D): each slave node to its point on the other side's face,
-    evaluated on FaceNodes at each force evaluation. Each bond runs from its slave to its point
+    evaluated on FaceNodes at each force evaluation, damped as cohesive_node_bonds. Each bond runs from its slave to its point
     (pairs[:, 0] is a node on the plane), its normal along the laminate's (y in 2D, z in 3D)
     pointing there: the opening is the two sides' separation either way. The stable step is
     that of elements and bonds together, as cohesive_node_bonds: a bond is a spring k on its
@@ -227,10 +258,13 @@ def node_to_face_bonds(dyn: ExplicitDynamics, face, area: np.ndarray, law, frict
     pairs = np.column_stack([face.slave, point])
     normal = np.zeros((k, 3))
     normal[:, dim - 1] = np.where(face.slave_above, -1.0, 1.0)
-    bonds = LawBonds(pairs, X, normal, area, law, friction=friction, label="interlaminar")
+    mu = 0.5 * face_pair_mass(dyn, face)  # (the damper's reduced mass: the bond's lightest node at both ends)
+    bonds = LawBonds(pairs, X, normal, area, law, friction=friction, label="interlaminar",
+                     damping=pair_damping(law.K, area, mu))
     dyn.node_forces = [FaceNodes(dyn, face).model(bonds, dyn)]
     dyn.add_springs(spring_stiffness(n, dim, np.column_stack([face.slave, face.nodes]),
-                                     np.column_stack([np.ones(k), -face.weights]), law.K * bonds.area))
+                                     np.column_stack([np.ones(k), -face.weights]), law.K * bonds.area),
+                    limit=pair_step_limit(law.K, bonds.area, mu))
     return bonds
 
 
