@@ -6,9 +6,10 @@ tongues of the piecewise-linear map): the mechanism the dampers are for. Checked
 of point masses, its relative motion a single degree of freedom with omega^2 = K A / mu:
 undamped it grows a millionfold at points inside the limit; with the dampers (10 % of the
 pair's critical damping on the opening's rate, on softened pairs at contact) it decays at every
-step up to omega dt = 1.5 (the limit the far field keeps, PAIR_RING_LIMIT = 1.6, less the clock's
-safety) and every softening, and the damper books the energy it takes. The dampers act on the
-opening only, only at contact, and only on pairs that have softened and not failed.
+step up to omega dt = 1.45 (the far field keeps its pairs below PAIR_RING_LIMIT = 1.5; a scan
+rings from 1.54, benchmarks/pair_ringing.py) and every softening, and the damper books the
+energy it takes. The dampers act on the opening only, only at contact, and only on pairs that
+have softened and not failed.
 """
 from __future__ import annotations
 
@@ -79,12 +80,12 @@ def test_a_softened_pair_rings_undamped_inside_its_linear_limit(wdt, damage):
 
 
 @settings(max_examples=25, deadline=None)
-@given(wdt=st.floats(0.05, 1.5), damage=st.floats(0.01, 0.99), v0=st.floats(-1.0, 1.0),
+@given(wdt=st.floats(0.05, 1.45), damage=st.floats(0.01, 0.99), v0=st.floats(-1.0, 1.0),
        u0=st.floats(-1e-8, 1e-8))
 def test_a_damped_pair_decays_at_every_step_and_softening(wdt, damage, v0, u0):
     """Damped, a softened pair's energy never grows past the whole-step measure's own swing
     (100 x, where the undamped tongues reach 1e6) and is gone (1e-6 of its start) within 5,000
-    steps, at any omega dt up to 1.5 (the far field runs at 0.9 of PAIR_RING_LIMIT at most) and
+    steps, at any omega dt up to 1.45 (the far field keeps below PAIR_RING_LIMIT, 1.5) and
     any softening."""
     if abs(v0) < 1e-3 and abs(u0) < 1e-11:
         v0 = 1.0
