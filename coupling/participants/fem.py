@@ -212,9 +212,9 @@ def pair_damping(K: float, area: np.ndarray, mu: np.ndarray, xi: float = PAIR_DA
 
 
 def pair_step_limit(K: float, area: np.ndarray, mu: np.ndarray) -> float:
-    """s, the step below which every damped pair decays (omega_p dt <= PAIR_RING_LIMIT). Below
-    the elements' own step wherever the pairs are stiffer than the elements allow (a penalty
-    capped by cohesive_penalty has omega_p <= omega_el / sqrt 2, and never binds)."""
+    """s, the step below which every damped pair decays (omega_p dt <= PAIR_RING_LIMIT). It binds
+    only where a pair's own mode is near the model's highest (the seed beam's and the DCB's
+    pairs, their penalty capped by cohesive_penalty, leave their steps as they were)."""
     return float(PAIR_RING_LIMIT / np.sqrt(np.max(K * np.asarray(area, float) / np.asarray(mu, float))))
 
 
