@@ -97,12 +97,21 @@ def sweep_points(case_name: str, sweep: dict[str, list[str]], base: dict, ref_mo
     return [(e, s) for _, e, s in todo[1:]]
 
 
+def compared_qoi(p: dict, qoi: dict, ref_qoi: dict) -> list[str]:
+    """The qoi a sweep point is compared on by default: those both runs report, except error
+    measures (_rel), the model's size (a cost) and the zone-edge probes' (a diagnostic of the
+    coupled zone: in an all-DEM reference it reads the damage where the case's zone would end)."""
+    zone_edge = {k.split(".")[1] for k, v in p.items()
+                 if k.startswith("probes.") and k.endswith(".kind") and v == "zone_edge_damage"}
+    return [q for q in qoi if q in ref_qoi and not q.endswith("_rel") and not q.startswith("model_size")
+            and q not in zone_edge]
+
+
 def bench(case_name: str, sweep: dict[str, list[str]], base: dict, ref_mode: str, ref_set: dict, dem: str,
           mode: str, out: Path, qoi: list[str] | None = None) -> dict:
     """Run the sweep; dem: one engine or several separated by commas (an axis of the sweep:
     one curve each; the reference runs on the first); qoi: names compared with the reference
-    (default: every qoi both runs report, except those ending in _rel, already error measures,
-    and the model's size, a cost, not an error)."""
+    (default: compared_qoi)."""
     sweep_points(case_name, sweep, base, ref_mode, ref_set, dem, mode)
     out.mkdir(parents=True, exist_ok=True)
     engines = dem.split(",")
@@ -121,8 +130,7 @@ def bench(case_name: str, sweep: dict[str, list[str]], base: dict, ref_mode: str
         name = "_".join(f"{k.split('.')[-1]}{v}" for k, v in zip(keys, combo)) or "base"
         name = f"{engine}_{name}" if len(engines) > 1 else name
         code, _, s = execute(case, mode, engine, out / name, quiet=True)
-        names = qoi or [q for q in s["qoi"] if q in ref["qoi"] and not q.endswith("_rel")
-                        and not q.startswith("model_size")]
+        names = qoi or compared_qoi(case.parameters, s["qoi"], ref["qoi"])
         errors = {q: abs(s["qoi"][q] - ref["qoi"][q]) / abs(ref["qoi"][q]) for q in names
                   if q in s["qoi"] and q in ref["qoi"] and ref["qoi"][q]}
         points.append({"setting": dict(zip(keys, combo)), "dem": engine, "status": s["status"], "wall_s": s["timing_s"]["total"],

@@ -309,3 +309,17 @@ def test_bench_speed_against_error(tmp_path, monkeypatch, capsys):
     assert r["reference"]["cached"] and [p["dem"] for p in r["points"]] == ["yade", "yade", "liggghts", "liggghts"]
     assert all(p["status"] == "ok" and 0 < p["max_rel_error"] < 5e-3 for p in r["points"])
     assert main(["bench", "chain_consistency", "--dem", "yade,fluent", "--out", str(tmp_path / "b4")]) == 2
+
+
+def test_a_bench_compares_the_structure_not_the_zone_s_own_diagnostics():
+    """By default a bench compares every qoi both runs report but error measures, the model's
+    size and the zone-edge probe's (an all-DEM reference reads the damage where the zone would
+    end: beam_impact's 0.79, which made every coupled point's error 100 %)."""
+    from coupling.bench import compared_qoi
+    from coupling.case import load_case
+    p = load_case("beam_impact_coarse").parameters
+    edge = [k.split(".")[1] for k, v in p.items() if k.endswith(".kind") and v == "zone_edge_damage"]
+    assert edge
+    run = {"peak_contact_force": 1.0, edge[0]: 0.0, "model_size": 9.0, "balance_error_rel": 1e-5, "zone_half_width": 1.0}
+    ref = {"peak_contact_force": 1.1, edge[0]: 0.8, "model_size": 90.0, "balance_error_rel": 1e-6}
+    assert compared_qoi(p, run, ref) == ["peak_contact_force"]
