@@ -174,15 +174,14 @@ def _bonds_pass(x, end, loc, d0, normal, area, Kb,
         else:
             t0, t1, t2, d = hashin_bond(g0, g1, g2, n0, n1, n2, d_old,
                                         hp[0], hp[1], hp[2], hp[3], hp[4], hp[5], hp[6] > 0)
+        on = o0 * n0 + o1 * n1 + o2 * n2  # the last step's opening
         if friction > 0 and dt > 0 and d >= 1.0 and dn < 0:  # closed crack faces slide with friction
-            on = o0 * n0 + o1 * n1 + o2 * n2
             v0 = ((g0 - dn * n0) - (o0 - on * n0)) / dt
             v1 = ((g1 - dn * n1) - (o1 - on * n1)) / dt
             v2 = ((g2 - dn * n2) - (o2 - on * n2)) / dt
             tn = dn * Kb[m]
             mu_p = friction * max(-tn, 0.0) / np.sqrt(v0 * v0 + v1 * v1 + v2 * v2 + v_reg * v_reg)
             t0, t1, t2 = tn * n0 + mu_p * v0, tn * n1 + mu_p * v1, tn * n2 + mu_p * v2
-        on = o0 * n0 + o1 * n1 + o2 * n2
         if visc[m] > 0.0 and dt > 0 and 0.0 < d < 1.0 and (dn < 0 or on < 0):  # softened, at contact
             q = visc[m] / dt * (dn - on)  # the damper on the opening's rate
             t0, t1, t2 = t0 + q * n0, t1 + q * n1, t2 + q * n2

@@ -100,11 +100,11 @@ _BOND_ROWS = ("damage", "delta", "traction", "t_failed", "force")
 
 def _carry_bonds(new, old, rows: np.ndarray, law_rows: bool = True) -> None:
     """New LawBonds' rows ``rows >= 0`` set to the old bonds' state there, and their ledger (the
-    work done so far, the friction's share, the time) the old one's."""
+    work done so far, the friction's and the dampers' shares, the time) the old one's."""
     at, src = np.flatnonzero(rows >= 0), rows[rows >= 0]
     for k in _BOND_ROWS:
         getattr(new, k)[at] = getattr(old, k)[src]
-    new.work, new.friction_work, new.time = old.work, old.friction_work, old.time
+    new.work, new.friction_work, new.damping_work, new.time = old.work, old.friction_work, old.damping_work, old.time
     if law_rows:
         for k in ("m0", "mf", "crushed"):
             if hasattr(new.law, k) and hasattr(old.law, k):
