@@ -63,21 +63,52 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
+class _UntilReaderLeaves:
+    """A terminal stream that goes quiet when its reader leaves (``femdem run ... 2>&1 | head``):
+    a write to the closed pipe would raise BrokenPipeError in the middle of a run, so from then on
+    the stream's descriptor writes to /dev/null and the run, its files and its exit code go on."""
+
+    def __init__(self, stream):
+        self._stream = stream
+
+    def write(self, text: str) -> int:
+        try:
+            return self._stream.write(text)
+        except BrokenPipeError:
+            self._silence()
+            return len(text)
+
+    def flush(self) -> None:
+        try:
+            self._stream.flush()
+        except BrokenPipeError:
+            self._silence()
+
+    def _silence(self) -> None:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), self._stream.fileno())  # the buffered text goes there too
+
+    def __getattr__(self, name):  # isatty, fileno, encoding, ... as the stream's
+        return getattr(self._stream, name)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Exit codes as in the module docstring; no traceback reaches the terminal: an unforeseen
     error prints one line and leaves its traceback in a log file."""
+    streams = sys.stdout, sys.stderr
+    sys.stdout, sys.stderr = map(_UntilReaderLeaves, streams)
     try:
         return _main(argv)
     except KeyboardInterrupt:
         print("femdem: interrupted", file=sys.stderr)
         return 130
-    except BrokenPipeError:  # output piped into head & co.: the reader left, nothing to report
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        return 0
     except Exception as exc:  # a defect: one line here, the traceback in a log
         log = _log_traceback()
         print(f"femdem: internal error: {type(exc).__name__}: {exc} (traceback in {log})", file=sys.stderr)
         return 1
+    finally:
+        for stream in (sys.stdout, sys.stderr):  # now, where a closed pipe is caught, not at exit
+            stream.flush()
+        sys.stdout, sys.stderr = streams
 
 
 def _log_traceback() -> Path:

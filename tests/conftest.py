@@ -7,8 +7,10 @@ if int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1")) > 1:
     os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
 import coupling  # noqa: E402, F401  (first: it sets the BLAS threads before numpy loads)
+import atexit
 import json
 import math
+import shutil
 import tempfile
 import tomllib
 from pathlib import Path
@@ -83,6 +85,7 @@ def later_peak(layup: str, support: str) -> float:
 
 
 _UNRANGED = Path(tempfile.mkdtemp(prefix="femdem-unranged-"))
+atexit.register(shutil.rmtree, _UNRANGED, ignore_errors=True)  # one per test process, not left in /tmp
 
 
 def unranged(case: str) -> str:

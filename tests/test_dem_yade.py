@@ -205,3 +205,17 @@ def test_sphere_on_a_wall(femdem):
         assert eng.positions().shape == (1, 3)
     finally:
         eng.finalize()
+
+
+def test_a_process_that_used_yade_leaves_no_temporary_directory():
+    """YADE makes /tmp/yade-XXXXXX at import; a process of ours (a worker, a run) removes it at
+    exit, twice imported or once (one was left by every run and worker before)."""
+    import subprocess
+    import sys
+    from pathlib import Path
+    code = ("import os; from dem_region.backends.yade import _import_yade; yade, _ = _import_yade(); _import_yade(); "
+            "print(os.path.dirname(yade.O.tmpFilename()))")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
+                       cwd=Path(__file__).resolve().parent.parent)
+    made = Path(r.stdout.strip().splitlines()[-1])
+    assert r.returncode == 0 and made.name.startswith("yade-") and not made.exists()

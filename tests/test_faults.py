@@ -138,3 +138,23 @@ def test_an_ordinary_user_without_a_home_runs_cases():
         assert r.returncode == 2 and "not writable" in r.stderr and len(r.stderr.strip().splitlines()) == 1
     finally:
         shutil.rmtree(home, ignore_errors=True)
+
+
+def test_a_run_whose_reader_left_finishes_and_keeps_its_results(tmp_path):
+    """`femdem run ... 2>&1 | head -0`: the pipe's reader is gone before the first line. The
+    warning printed before the run and the report after it go nowhere; the run, its files and
+    its exit code are those of a run on a terminal (it stopped with BrokenPipeError before)."""
+    out = tmp_path / "run"
+    read, write = os.pipe()
+    os.close(read)
+    try:
+        r = subprocess.run([sys.executable, "-m", "coupling.cli", "run", "enf_coarse", "--out", str(out),
+                            "--set=geometry.half_span=0.03", "--set=geometry.crack_length=0.015",
+                            "--set=geometry.length=0.06", "--set=clock.t_end=1e-6"],
+                           cwd=ROOT, stdout=write, stderr=write, timeout=300)
+    finally:
+        os.close(write)
+    s = json.loads((out / "summary.json").read_text())
+    assert (r.returncode, s["status"]) == (0, "ok"), s["message"]
+    assert any("beam theory's peak load (LEFM) does not apply" in w for w in s["warnings"])
+    assert not (out / "error.log").exists()

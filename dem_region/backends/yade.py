@@ -10,9 +10,11 @@ move. (Newton's "forces last reset" warning that this order triggers is silenced
 """
 from __future__ import annotations
 
+import atexit
 import contextlib
 import io
 import os
+import shutil
 import sys
 from pathlib import Path
 from typing import Callable
@@ -41,11 +43,14 @@ def _import_yade():
         pass
     if YADE_PY not in sys.path:
         sys.path.insert(1, YADE_PY)
+    first = "yade" not in sys.modules
     with contextlib.redirect_stdout(io.StringIO()):  # yade prints 'Using python version' on import
         import yade
         import yade.config
         import yade._utils
         from yade import wrapper
+    if first:  # YADE makes /tmp/yade-XXXXXX at import and removes it only at its own executable's exit
+        atexit.register(shutil.rmtree, os.path.dirname(yade.O.tmpFilename()), ignore_errors=True)
     return yade, wrapper
 
 
