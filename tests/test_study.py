@@ -877,3 +877,29 @@ def test_a_mesh_file_that_does_not_fit_is_refused(femdem, args, words):
     assert code == 2 and s is None and err.count("\n") == 1, err
     for w in words:
         assert w in err, err
+
+
+@settings(max_examples=8, deadline=None)
+@given(plies=st.sampled_from([1, 2]), n=st.integers(2, 60), ratio=st.floats(1.0, 20.0),
+       half_width=st.floats(3e-3, 12e-3), dim=st.sampled_from([2, 3]))
+def test_no_far_field_element_is_shorter_than_the_particles_beside_it(plies, n, ratio, half_width, dim):
+    """A coupled beam's far field (2D and 3D) is graded from the zone to the support in the most
+    of mesh.elements_along whose first element is at least the particle spacing d: shorter ones
+    resolve nothing the particles do not and set the shared step below the lattice's (the seed
+    beam at 2 plies per particle: 0.15 mm elements beside 0.3 mm particles)."""
+    from coupling.case import load_case
+    from fem_region import mesh
+    case = load_case("beam_impact_3d_coarse" if dim == 3 else "beam_impact",
+                     {"zone.plies_per_particle": plies, "mesh.elements_along": n, "mesh.element_ratio": ratio,
+                      "zone.half_width": half_width, "clock.t_end": 1e-6})
+    sim, built = case.scene.assemble(case.parameters, "coupled", "liggghts")
+    try:
+        xs, d, L = np.unique(np.round(built.dyn.region.X[:, 0], 12)), built.t, built.half_span
+    finally:
+        sim.close()
+    k = len(xs) - 1
+    assert xs[-1] == pytest.approx(L) and 1 <= k <= n
+    assert np.diff(xs).min() >= d * (1 - 1e-9) or k == 1
+    if k < n:  # the most elements that allows it: one more would put a shorter one at the zone
+        more = mesh.graded(xs[0], L, k + 1, ratio ** (1.0 / k), xs[0])
+        assert more[1] - more[0] < d * (1 - 1e-9)

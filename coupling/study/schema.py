@@ -268,7 +268,8 @@ SECTIONS: dict[str, dict[str, Param]] = {
     "mesh": {
         "element": Param("quad4", "element: quad4 (beam) or hex8 (beam_3d, plate, disc, block)", kind="str",
                          choices=("quad4", "hex8")),
-        "elements_along": Param(30, "FEM elements between the zone and a support (a disc: along its radius, a "
+        "elements_along": Param(30, "FEM elements between the zone and a support, at most: none shorter than the "
+                                "particle spacing (a beam; a disc: along its radius, a "
                                 "multiple of 8 puts a node ring on the rod's edge)", kind="int", low=2),
         "elements_per_ply": Param(1, "a disc's: Hex8 elements through each ply", kind="int", low=1, high=8),
         "file": Param("", "a Gmsh mesh (.msh, read by meshio) of a beam slice's half, x from 0 to span / 2, y "
