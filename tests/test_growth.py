@@ -140,7 +140,10 @@ def test_damage_the_far_field_cannot_take_is_reported(femdem, tmp_path):
     22.1 and 23.6 mm by 0.6 ms, docs/benchmarks.md session 38). The run says so in one warning
     line, printed and in the summary, naming where (the x of the history's peak) and when (the
     first sample at 1); the qoi hold the peak and its place. A run whose far field stays below 1
-    (the hand-drawn 12 mm zone fixed, same impact, its far field graded) says nothing of it."""
+    (the hand-drawn 12 mm zone fixed, struck at 8 m/s: no interface debonds by 120 us, the index
+    about 0.2) says nothing of it. (At 12 m/s the hand-drawn zone's far field, no element finer
+    than the particles since session 43, debonds the upper interface over 28.2 mm as all-DEM does,
+    and its 90 plies then pass 1 near the clamp too.)"""
     sets = ["--set=zone.grow=true", "--set=zone.half_width=0.9e-3", "--set=impactors.cylinder.velocity=12",
             "--set=clock.t_end=1.2e-4"]
     code, s, err = femdem("run", "beam_impact_coarse", *sets)
@@ -155,7 +158,7 @@ def test_damage_the_far_field_cannot_take_is_reported(femdem, tmp_path):
     with h5py.File(tmp_path / "run0" / "history.h5") as h:
         t, index = h["history"]["time"][:], h["history"]["far_field_hoffman"][:]
     assert f"t = {t[np.argmax(index >= 1.0)]:.3g} s" in lines[0]
-    code, s, err = femdem("run", "beam_impact_coarse", "--set=impactors.cylinder.velocity=12", "--set=clock.t_end=1.2e-4")
+    code, s, err = femdem("run", "beam_impact_coarse", "--set=impactors.cylinder.velocity=8", "--set=clock.t_end=1.2e-4")
     assert code == 0, err
     assert s["qoi"]["peak_far_field_hoffman"] < 1.0 and not any("far field's" in w for w in s["warnings"])
 
