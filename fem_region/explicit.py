@@ -15,7 +15,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from .bulk_viscosity import BulkViscosity
-from .kernels import add_first_columns, axpy, divide_rows, scale_rows, kinetic_energy as nodal_kinetic_energy
+from .kernels import add_first_columns, axpy, divide_rows, scale_rows, support_reaction, \
+    kinetic_energy as nodal_kinetic_energy
 from physics.impactor import RigidImpactor
 from physics.kernels import add_at, ball_on_nodes
 from .region import FemRegion
@@ -259,22 +260,17 @@ class ExplicitDynamics:
     def _support_reaction(self, f: np.ndarray, du: np.ndarray, a: np.ndarray) -> None:
         """The prescribed DOFs: the support supplies what their path needs beyond the residual
         force f (n_nodes, dim) N; its work over du (n_nodes, dim) m by the trapezoidal rule;
-        their accelerations into a. In the buffers of the prescribed DOFs (nothing allocated)."""
-        P, L = self._prescribed, self.ledger
+        their accelerations into a. One compiled pass into the buffers of the prescribed DOFs."""
+        P = self._prescribed
         a_pres = self._prescribed_acceleration()
         if getattr(self, "_m_prescribed_of", None) is not self.m:  # the prescribed DOFs' masses, per mass array
             self._m_prescribed, self._m_prescribed_of = self.m.repeat(self.region.dim)[P], self.m
-            self._pres_f, self._pres_w, *self._pres_r = (np.zeros(P.size) for _ in range(4))
+            self._pres_r = [np.zeros(P.size) for _ in range(2)]
         r0, r1 = self._pres_r  # the reaction goes into the one the last step's is not in
-        reaction, f_p, work = r1 if self._reaction_prev is r0 else r0, self._pres_f, self._pres_w
-        np.take(f.reshape(-1), P, out=f_p, mode="clip")  # ("raise" copies through a temporary)
-        np.multiply(self._m_prescribed, a_pres, out=reaction)
-        np.subtract(reaction, f_p, out=reaction)
-        np.add(self._reaction_prev, reaction, out=work)
-        np.take(du.reshape(-1), P, out=f_p, mode="clip")  # (f_p now the DOFs' motion)
-        L.support_work += 0.5 * float(np.vdot(work, f_p))
+        reaction = r1 if self._reaction_prev is r0 else r0
+        self.ledger.support_work += support_reaction(f, du, a, P, self._m_prescribed, a_pres, self._reaction_prev,
+                                                     reaction)
         self._reaction_prev = reaction
-        a.reshape(-1)[P] = a_pres
 
     def reaction(self, dofs: np.ndarray) -> float:
         """N, sum of the support reactions on flat DOFs ``dofs`` (all prescribed) at the last

@@ -262,6 +262,23 @@ def divide_rows(f, m, out):
 
 
 @kernel
+def support_reaction(f, du, a, dofs, m, a_pres, reaction_prev, reaction):
+    """The prescribed DOFs ``dofs`` (flat, into (n_nodes, dim)) in one pass: reaction <- m a_pres -
+    f on them (N, what the support applies beyond the residual force f), a <- a_pres there;
+    returns the support's work over the motion du (n_nodes, dim) m since the last evaluation,
+    trapezoidal with reaction_prev (J). m, a_pres, reaction_prev, reaction: (len(dofs),)."""
+    dim = f.shape[1]
+    work = 0.0
+    for k in range(dofs.shape[0]):
+        i, c = dofs[k] // dim, dofs[k] % dim
+        r = m[k] * a_pres[k] - f[i, c]
+        reaction[k] = r
+        work += (reaction_prev[k] + r) * du[i, c]
+        a[i, c] = a_pres[k]
+    return 0.5 * work
+
+
+@kernel
 def respa_kicks(v, a, f_tie, band, m, dt, dt_fast, slow, kick, f_fast, a_slow):
     """The FEM's kicks of one DEM step of the impulse (r-RESPA) clock, in one pass:
     f_fast = f_tie - band; at a FEM step (``slow``) a_slow = a - (f_fast - f_tie) / m and

@@ -232,3 +232,24 @@ def test_a_ramped_load_s_work_closes_the_ledger(steps, E, load):
     e = dyn.energies()
     assert e["external_work"] > 0
     assert abs(e["external_work"] - e["kinetic"] - e["internal"]) < 2e-4 * e["external_work"], e
+
+
+@settings(max_examples=30, deadline=None)
+@given(n=st.integers(2, 40), dim=st.sampled_from([2, 3]), seed=st.integers(0, 2**32 - 1), share=st.floats(0.05, 1.0))
+def test_the_support_pass_is_the_reaction_and_trapezoidal_work_of_its_dofs(n, dim, seed, share):
+    """fem_region.kernels.support_reaction against its definition in numpy: on the prescribed
+    DOFs, reaction = m a_pres - f, a = a_pres, work = (reaction_prev + reaction) . du / 2; every
+    other DOF's acceleration untouched."""
+    from fem_region.kernels import support_reaction
+    rng = np.random.default_rng(seed)
+    f, du, a = (rng.standard_normal((n, dim)) for _ in range(3))
+    dofs = np.flatnonzero(rng.random(n * dim) < share)
+    m, a_pres, prev = rng.random(dofs.size) + 0.1, rng.standard_normal(dofs.size), rng.standard_normal(dofs.size)
+    a0, reaction = a.copy(), np.zeros(dofs.size)
+    work = support_reaction(f, du, a, dofs, m, a_pres, prev, reaction)
+    expected = m * a_pres - f.reshape(-1)[dofs]
+    assert np.allclose(reaction, expected, rtol=1e-14, atol=1e-14)
+    assert work == pytest.approx(0.5 * np.dot(prev + expected, du.reshape(-1)[dofs]), rel=1e-12, abs=1e-12)
+    a_expected = a0.reshape(-1).copy()
+    a_expected[dofs] = a_pres
+    assert np.array_equal(a.reshape(-1), a_expected)
