@@ -85,7 +85,9 @@ class _UntilReaderLeaves:
             self._silence()
 
     def _silence(self) -> None:
-        os.dup2(os.open(os.devnull, os.O_WRONLY), self._stream.fileno())  # the buffered text goes there too
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, self._stream.fileno())  # the buffered text goes there too
+        os.close(null)
 
     def __getattr__(self, name):  # isatty, fileno, encoding, ... as the stream's
         return getattr(self._stream, name)
