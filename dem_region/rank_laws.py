@@ -34,12 +34,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from physics.law_bonds import LawBonds
+from physics.law_bonds import WORK, LawBonds
 
 from .model_step import model_states, set_model_states
 
 BOND_ROWS = ("damage", "delta", "traction", "t_failed", "mirror_force", "law_m0", "law_mf", "law_crushed")
-SUMMED = ("work", "friction_work", "damping_work", "law_snapback")
+SUMMED = (*WORK, "law_snapback")
 
 
 class _Family:
@@ -99,7 +99,8 @@ class RankLaws:
         self._foreign = None  # the ModelStep's rows of other ranks' particles (at the first step)
         if self.rank != 0:
             for b in laws:
-                b.work = b.friction_work = b.damping_work = 0.0
+                for k in WORK:
+                    setattr(b, k, 0.0)
                 if hasattr(b.law, "snapback"):
                     b.law.snapback = 0
 

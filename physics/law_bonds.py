@@ -49,6 +49,9 @@ from .laws import friction_traction
 
 
 _LAW_STATE = ("m0", "mf", "crushed", "snapback")  # what a stateful law carries between steps
+# the bonds' work accounts (J): the whole, and the friction's and the dampers' shares of it; what
+# a checkpoint keeps, a grown zone carries over and MPI ranks sum
+WORK = ("work", "friction_work", "damping_work")
 INDEX = np.int32  # the fused step's index arrays: half the bytes a bond reads of int64's
 
 
@@ -350,9 +353,8 @@ class LawBonds:
         return self.damage >= 1.0
 
     def checkpoint_state(self) -> dict:
-        d = {"damage": self.damage, "delta": self.delta, "traction": self.traction, "work": self.work,
-             "friction_work": self.friction_work, "damping_work": self.damping_work, "t_failed": self.t_failed,
-             "time": self.time}
+        d = {"damage": self.damage, "delta": self.delta, "traction": self.traction, "t_failed": self.t_failed,
+             "time": self.time, **{k: getattr(self, k) for k in WORK}}
         for k in _LAW_STATE:
             if hasattr(self.law, k):
                 d["law_" + k] = getattr(self.law, k)
@@ -362,8 +364,8 @@ class LawBonds:
         for k in ("damage", "delta", "traction", "t_failed"):
             setattr(self, k, np.array(d[k], float))
         self.work, self.time = float(d["work"]), float(d["time"])
-        self.friction_work = float(d.get("friction_work", 0.0))  # (0 in a checkpoint written before it)
-        self.damping_work = float(d.get("damping_work", 0.0))
+        for k in WORK[1:]:  # (0 in a checkpoint written before the share was kept)
+            setattr(self, k, float(d.get(k, 0.0)))
         for k in _LAW_STATE:
             if "law_" + k in d:
                 v = np.array(d["law_" + k])

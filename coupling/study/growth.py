@@ -52,6 +52,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from physics.kernels import damaged_reach, flagged_reach, touched_reach
+from physics.law_bonds import WORK
 
 from ..params import CaseError
 from ..simulation import energy_scale
@@ -104,7 +105,8 @@ def _carry_bonds(new, old, rows: np.ndarray, law_rows: bool = True) -> None:
     at, src = np.flatnonzero(rows >= 0), rows[rows >= 0]
     for k in _BOND_ROWS:
         getattr(new, k)[at] = getattr(old, k)[src]
-    new.work, new.friction_work, new.damping_work, new.time = old.work, old.friction_work, old.damping_work, old.time
+    for k in (*WORK, "time"):
+        setattr(new, k, getattr(old, k))
     if law_rows:
         for k in ("m0", "mf", "crushed"):
             if hasattr(new.law, k) and hasattr(old.law, k):
