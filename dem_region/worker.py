@@ -60,6 +60,12 @@ def _is_eof(msg) -> bool:
     return isinstance(msg, tuple) and msg == ("eof",)
 
 
+class _Finalized(BaseException):
+    """The orchestrator closed the engine inside a hook (it stopped mid-advance: Ctrl-C,
+    SIGTERM): the advance under way ends here, and the worker with it (not an error to report:
+    the socket may be gone; on several ranks each ends where it stands, MPI not used again)."""
+
+
 class _Ranks:
     """The orchestrator's connection as every rank sees it: rank 0 receives and forwards each
     message to the other ranks; only rank 0 sends to the orchestrator."""
@@ -177,7 +183,8 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
                 msg = conn.recv()
                 if msg[0] == "go":
                     break
-                handle(msg)
+                if not handle(msg):
+                    raise _Finalized
         else:  # ring, then wait for the go, serving the queries the hook makes meanwhile
             state["hooks"] += 1
             bell.ring(HOOK, state["hooks"])
@@ -185,7 +192,8 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
             wait.reset()
             while not bell.rung(GO, state["hooks"]):
                 if wait(conn.poll):
-                    handle(conn.recv())
+                    if not handle(conn.recv()):
+                        raise _Finalized
                     wait.reset()
             if bell.value[ABORT]:  # the orchestrator stopped the advance: no further step (run)
                 return
@@ -309,9 +317,13 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
                 conn.send(("ok", _plain(out)))
             elif op == "raise":  # an advance rung on the doorbell failed: report it as its own
                 raise args[0]
-            elif op == "finalize":
+            elif op == "finalize":  # (rank 0 forwarded it: every rank ends here)
+                state["finalized"] = True
                 backend.finalize()
-                conn.send(("ok",))
+                try:  # an orchestrator that stopped mid-advance may have read the hook's message as
+                    conn.send(("ok",))  # the reply and closed the socket: nothing left to tell it
+                except (OSError, EOFError):
+                    pass
                 return False
             else:
                 conn.send(("error", f"unknown operation {op!r}"))
@@ -351,8 +363,11 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
         while serve_one():
             pass
     except (EOFError, ConnectionError):  # the orchestrator is gone: stop, and let the engine shut down cleanly
-        conn.tell_stop()
-        backend.finalize()
+        if not state.get("finalized"):  # (after the engine's finalize MPI is not used again)
+            conn.tell_stop()
+            backend.finalize()
+    except _Finalized:
+        pass
     for b in state["blocks"]:
         b.close()
     if state["bell"] is not None:

@@ -7,9 +7,11 @@ from conftest import assert_checks
 
 
 @pytest.mark.parametrize("engine", ["liggghts", pytest.param("yade", marks=pytest.mark.slow)])
-# (the ENF's defaults with -m slow: the suite runs it coupled at a derandomized draw of its
-# ranges, tests/test_delamination_ranges.py, in half the time)
-@pytest.mark.parametrize("case", ["dcb_coarse", pytest.param("enf_coarse", marks=pytest.mark.slow), "mixed_mode_coarse"])
+# (the DCB's and ENF's defaults with -m slow: the suite runs the DCB coupled at a derandomized
+# draw of its ranges, tests/test_delamination_ranges.py, and the ENF in its window,
+# tests/test_window_growth.py)
+@pytest.mark.parametrize("case", [pytest.param(c, marks=pytest.mark.slow) for c in ("dcb_coarse", "enf_coarse")]
+                         + ["mixed_mode_coarse"])
 def test_delamination_specimens_match_beam_theory(femdem, case, engine):
     """DCB (mode I), ENF (mode II), SLB (mixed): peak load, compliance, propagation and
     dissipation against closed forms computed from the run's parameters. On LIGGGHTS in the

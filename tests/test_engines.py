@@ -70,18 +70,22 @@ class TestEngineConformance:
         assert_checks(s)
         assert s["energy"]["balance_error_rel"] < 0.01
 
-    @pytest.mark.parametrize("case", ["bonded_block_modulus", "bond_strength",
-                                      pytest.param("bonded_beam_bending", marks=pytest.mark.slow)])
-    def test_bonded_block(self, femdem, engine, case, tmp_path, monkeypatch):
-        """Calibration by virtual tests (Cundall damping, partial prescriptions), brittle bonds
-        and a bonded cantilever, each engine calibrating its own lattice (fresh cache)."""
-        if engine == "yade":
-            pytest.skip("tests/test_dem_yade.py runs the bonded block cases on YADE")
-        monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
-        code, s, err = femdem("run", case, "--dem", engine)
-        assert code == 0, err
-        assert_checks(s)
-        assert s["versions"].get(engine)
+
+# YADE's in tests/test_dem_yade.py; LAMMPS' bond strength with -m slow (22 s, a message to its
+# worker at each step; the suite's ten minutes, session 44): its brittle bonds are the code
+# LIGGGHTS runs here (backends/lammps_family.py)
+@pytest.mark.parametrize("engine, case", [
+    ("liggghts", "bonded_block_modulus"), ("liggghts", "bond_strength"), ("lammps", "bonded_block_modulus"),
+    pytest.param("lammps", "bond_strength", marks=pytest.mark.slow),
+    *[pytest.param(e, "bonded_beam_bending", marks=pytest.mark.slow) for e in ("liggghts", "lammps")]])
+def test_bonded_block(femdem, engine, case, tmp_path, monkeypatch):
+    """Calibration by virtual tests (Cundall damping, partial prescriptions), brittle bonds
+    and a bonded cantilever, each engine calibrating its own lattice (fresh cache)."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    code, s, err = femdem("run", case, "--dem", engine)
+    assert code == 0, err
+    assert_checks(s)
+    assert s["versions"].get(engine)
 
 
 @pytest.mark.parametrize("engine", ["liggghts", "lammps"])
@@ -347,6 +351,8 @@ def test_worker_transport_is_timed_apart(femdem):
     assert min(s["timing_s"].values()) >= 0.0, s["timing_s"]
 
 
+@pytest.mark.slow  # 20 s (the suite's ten minutes, session 44): the suite runs two ranks in
+# tests/test_faults.py (killed, nothing left behind); their results against one rank's here
 def test_lammps_on_several_ranks_matches_one_rank(femdem):
     """LAMMPS on two MPI ranks inside its worker (its own mpiexec): the atoms are spread over
     both ranks, and coupled (kinematic tie, subcycling), Hertz and brittle-bond runs give every

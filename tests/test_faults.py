@@ -88,7 +88,10 @@ def _descendants(pid: int) -> list[int]:
 def test_killed_orchestrator_leaves_no_lammps_rank_behind(tmp_path, sig):
     """LAMMPS on two ranks under its mpiexec: when the orchestrator is killed, rank 0 sees the
     socket close (in a receive or a send), tells the other rank, both shut LAMMPS down and
-    mpiexec exits."""
+    mpiexec exits. SIGTERM is a notice (a batch scheduler's, before its SIGKILL): the run
+    closes its engine and releases its shared memory itself, says so in one line and exits
+    143, its partial directory left to resume (its SIGTERM used to end it as SIGKILL does,
+    and once its block outlived it by 30 s, session 44)."""
     out = tmp_path / "run"
     mpich_before = set(glob.glob("/dev/shm/mpich*"))
     proc = subprocess.Popen([sys.executable, "-m", "coupling.cli", "run", "coupled_vibration", "--dem", "lammps",
@@ -102,7 +105,11 @@ def test_killed_orchestrator_leaves_no_lammps_rank_behind(tmp_path, sig):
     ranks = [p for p in family if "dem_region.worker" in Path(f"/proc/{p}/cmdline").read_text(errors="ignore")]
     assert len(ranks) >= 3, "mpiexec and two ranks expected"  # mpiexec's own line names the worker too
     os.kill(proc.pid, sig)
-    proc.wait()
+    _, err = proc.communicate()
+    if sig == signal.SIGTERM:
+        assert proc.returncode == 143 and err.strip() == "femdem: terminated (SIGTERM)", (proc.returncode, err)
+        assert not _blocks_of(proc.pid), "the orchestrator released its shared memory before it exited"
+        assert Path(str(out) + ".partial").is_dir() and not out.exists()
     t0 = time.time()
     while time.time() - t0 < 30:
         alive = [p for p in family if subprocess.run(["ps", "-p", str(p)], capture_output=True).returncode == 0]

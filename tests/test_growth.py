@@ -190,6 +190,9 @@ def _resumed_as_straight(tmp_path, name: str, sets: dict, dem: str, at: float):
         assert np.array_equal(v, resumed["history"][k], equal_nan=True), k
 
 
+@pytest.mark.slow  # 19 s (the suite's ten minutes, session 44): the suite resumes grown zones on
+# LIGGGHTS (the bonded beam, the disc, the window, a released reserve) and LAMMPS' hosted laws
+# (tests/test_resume_cases.py)
 def test_a_run_resumed_after_a_conversion_finishes_as_the_uninterrupted_one(tmp_path):
     """LAMMPS (its laws in the worker), the checkpoint at two thirds of the run."""
     _resumed_as_straight(tmp_path, "beam_impact_coarse", dict(GROW, **{"clock.t_end": 9e-6}), "lammps", 2 / 3)
@@ -208,6 +211,8 @@ def test_bad_growth_settings_are_refused(femdem, sets, key):
 CFRP = {"zone.grow": True}
 
 
+@pytest.mark.slow  # 43 s, two runs (the suite's ten minutes, session 44): the suite grows the bonded
+# beam anywhere in its ranges and resumes it across a conversion (below)
 def test_a_bonded_beam_s_zone_grows_ahead_of_its_cracks(femdem, tmp_path):
     """cfrp_beam_impact_coarse (LIGGGHTS): the case's 3 in zone cracks at its edge; grown from it,
     no damage ever reaches the zone's edge, the conversions keep the momentum to round-off, the
@@ -376,6 +381,8 @@ def _grown_square(case: str, sets: dict):
     return p, growth, region0
 
 
+@pytest.mark.slow  # 27 s (the suite's ten minutes, session 44): the suite grows the same square
+# zone in the rod's disc (test_a_disc_s_square_zone_grows_keeping_momentum_and_mass)
 def test_a_plate_s_square_zone_grows_keeping_momentum_and_mass():
     """The clamped cross-ply plate (tests/studies/clamped_plate.toml) struck at 2.5 m/s from a
     2.5 mm square (LIGGGHTS, in process, to 75 us: past the first conversion at 59 us): the zone

@@ -46,8 +46,11 @@ def _kill_after_checkpoint(args, out: Path, timeout=120):
     ("free_vibration", ["run.steps=40000", "output.checkpoint_every=4000", "output.history_every=100"]),
     ("coupled_vibration --dem liggghts", ["run.steps=4000", "output.checkpoint_every=400", "clock.substeps=2",
                                           "output.history_every=20"]),
-    ("coupled_vibration --dem lammps", ["run.steps=2000", "output.checkpoint_every=400", "clock.substeps=2",
-                                        "output.history_every=20"]),
+    # (-m slow, the suite's ten minutes: the suite resumes LAMMPS' worker with its hosted laws,
+    # tests/test_resume_cases.py)
+    pytest.param("coupled_vibration --dem lammps", ["run.steps=2000", "output.checkpoint_every=400",
+                                                    "clock.substeps=2", "output.history_every=20"],
+                 marks=pytest.mark.slow),
     # law bonds on FEM nodes (the layers' interface) carry damage that the checkpoint must keep
     ("rod_impact_coarse", ["output.checkpoint_every=300", "output.history_every=20"]),
     pytest.param("coupled_vibration --dem lammps", ["run.steps=4000", "output.checkpoint_every=400", "clock.substeps=2",

@@ -29,6 +29,12 @@ SLOW = {"panel_buckling_coarse", "cfrp_beam_impact_3d_coarse", "beam_impact_3d_c
 # with -m slow too (the suite's budget): the Chung-Ooi test 3 is test 2's scene (a sphere on a
 # fixed one) with other constants, and free_vibration's resume is tests/test_restart.py's first
 SLOW |= {"chung_ooi_3", "free_vibration"}
+# and (the suite's ten minutes, session 44) all but one case of each kind: the suite resumes an
+# all-FEM case (bar_wave), an all-DEM one (block_impact) and a coupled one (interface_patch); the
+# others of each kind resume the same code with -m slow (coupled_vibration, rod_impact_coarse
+# and a grown zone resume in tests/test_restart.py and tests/test_growth.py)
+SLOW |= {"cantilever", "bonded_block_modulus", "chung_ooi_1", "chung_ooi_2", "chain_consistency",
+         "coupled_free_flight", "interface_wave"}
 CASES = [pytest.param(c, marks=pytest.mark.slow) if c in SLOW else c for c in bundled_cases() if c not in FULL]
 ENV = {**os.environ, "PYTHONPATH": str(ROOT)}
 

@@ -172,7 +172,10 @@ def test_the_schema_is_documented_and_docs_cases_md_is_its_output():
 ENGINES = ["liggghts", "lammps", "yade"]
 
 
-@pytest.mark.parametrize("mode, dem", [*[("coupled", e) for e in ENGINES[1:]], *[("dem", e) for e in ENGINES]])
+# all-DEM on YADE and LAMMPS with -m slow (the suite's ten minutes, session 44: 28 s; the suite
+# runs all-DEM on those engines in tests/test_dem_yade.py and tests/test_engines.py)
+@pytest.mark.parametrize("mode, dem", [*[("coupled", e) for e in ENGINES[1:]], ("dem", "liggghts"),
+                                       *[pytest.param("dem", e, marks=pytest.mark.slow) for e in ENGINES[1:]]])
 def test_a_study_written_only_as_a_case_file_runs_everywhere(femdem, mode, dem):
     """The three-point bend (tests/studies/): every mode on every engine (all-FEM and coupled on
     LIGGGHTS in test_the_coupled_study_equals_its_all_fem_beam); the peak deflection against
@@ -196,6 +199,8 @@ def test_a_plate_study_runs_everywhere(femdem, mode, dem):
     assert_checks(s)
 
 
+@pytest.mark.slow  # 36 s (the suite's ten minutes, session 44): the suite runs the plate coupled
+# against its closed form (test_the_plate_holds_its_closed_form_for_other_materials_and_impacts)
 def test_the_coupled_plate_equals_its_all_fem_plate(femdem):
     """The particle column under the sphere and the tie on its two inner faces add no compliance:
     coupled and all-FEM peak deflections within 3 % (the sphere at 1 m/s), each run's checks
@@ -233,7 +238,9 @@ def punch_study(tmp_path, half_width: float = 3e-3):
     return path
 
 
-@pytest.mark.parametrize("mode", ["fem", "coupled", "dem"])
+# all-DEM with -m slow (the suite's ten minutes, session 44): the coupled run strikes the
+# particles with the punch too
+@pytest.mark.parametrize("mode", ["fem", "coupled", pytest.param("dem", marks=pytest.mark.slow)])
 def test_a_flat_punch_bends_the_beam_as_the_spring_mass_estimate_says(femdem, tmp_path, mode):
     """A flat punch (impactors.*.shape = "flat_punch", 2D beams) on the FEM nodes, on the
     particles (its face grown by their radius) and on both: the peak deflection within the
@@ -447,6 +454,8 @@ def test_the_plate_holds_its_closed_form_for_other_materials_and_impacts(femdem,
     assert_checks(s)
 
 
+@pytest.mark.slow  # 21 s (the suite's ten minutes, session 44): the suite runs the 3D strip at its
+# defaults (tests/test_seed.py::test_beam_impact_3d_coarse)
 @settings(max_examples=1, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.generate],
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(radius=st.floats(3e-3, 8e-3), velocity=st.floats(2.0, 12.0), mass=st.floats(0.3, 1.2))
@@ -502,8 +511,11 @@ def _file_elements(x0: float) -> int:
     return int(np.sum(m.points[quads, 0].min(axis=1) >= x0 - 1e-12))
 
 
-@pytest.mark.parametrize("mode, dem", [("fem", None), ("coupled", "liggghts"), ("coupled", "yade"),
-                                       pytest.param("coupled", "lammps", marks=pytest.mark.slow), ("dem", "liggghts")])
+# coupled on YADE and LAMMPS with -m slow (the suite's ten minutes): the case-file study above
+# runs coupled on both; the mesh file's far field is the engine's no matter
+@pytest.mark.parametrize("mode, dem", [("fem", None), ("coupled", "liggghts"),
+                                       *[pytest.param("coupled", e, marks=pytest.mark.slow) for e in ("yade", "lammps")],
+                                       ("dem", "liggghts")])
 def test_a_gmsh_meshed_study_runs_everywhere(femdem, mode, dem):
     """The three-point bend with its far field meshed by Gmsh (physical groups name the laminate
     and the support): every mode, the coupled one on every engine, against the same closed form;
