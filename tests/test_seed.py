@@ -48,6 +48,9 @@ BEAM_GEOMETRY = dict(span=st.floats(20e-3, 40e-3), radius=st.floats(3e-3, 8e-3),
                      support=verified(BEAM_RANGES["supports.clamps.condition"]))
 
 
+@pytest.mark.slow  # 11 s (the suite's ten minutes, session 44): the suite draws every key of the
+# ranges at once, the geometry, impact, layup and support among them
+# (test_beam_impact_checks_hold_anywhere_in_its_ranges); the hand-drawn zone's width here
 @settings(max_examples=1, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.generate],
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(**BEAM_GEOMETRY)
