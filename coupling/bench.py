@@ -6,6 +6,13 @@ default the same case in ``--mode dem``, the whole domain as particles, or a run
 ``--reference-set`` overrides, e.g. the finest setting). References are cached by their
 resolved parameters, mode and engine, so sweeps reuse them. Writes speed_error.json and
 speed_error.png (wall time against error, the Pareto front marked).
+
+Speed is a ratio measured side by side: each point's ``speedup`` is the reference's wall time
+over its own. A cached reference ran at another hour (this VM's speed moves by a third from hour
+to hour); with ``--repeat N`` the bench runs the reference again in each of N rounds, each
+round the reference then every point, and reports the medians: each run's wall time, and each
+point's speedup as the median of its rounds' ratios (a drift of the machine between rounds
+then cancels within each ratio).
 """
 from __future__ import annotations
 
@@ -13,6 +20,7 @@ import hashlib
 import itertools
 import json
 import os
+import statistics
 from pathlib import Path
 
 import numpy as np
@@ -46,11 +54,13 @@ def parse_sweep(items: list[str]) -> dict[str, list[str]]:
     return out
 
 
-def reference(case_name: str, overrides: dict, mode: str, dem: str, out: Path) -> tuple[dict, bool]:
-    """The reference summary (from the cache when the same run was made before)."""
+def reference(case_name: str, overrides: dict, mode: str, dem: str, out: Path,
+              fresh: bool = False) -> tuple[dict, bool]:
+    """The reference summary (from the cache when the same run was made before, unless
+    ``fresh``: run again, and the cache holds this run's)."""
     case = load_case(case_name, overrides)
     path = _cache_dir() / f"{_key(case.parameters, mode, dem)}.json"
-    if path.exists():
+    if path.exists() and not fresh:
         return json.loads(path.read_text()), True
     code, _, summary = execute(case, mode, dem, out, quiet=True)
     if code:
@@ -108,45 +118,68 @@ def compared_qoi(p: dict, qoi: dict, ref_qoi: dict) -> list[str]:
 
 
 def bench(case_name: str, sweep: dict[str, list[str]], base: dict, ref_mode: str, ref_set: dict, dem: str,
-          mode: str, out: Path, qoi: list[str] | None = None) -> dict:
+          mode: str, out: Path, qoi: list[str] | None = None, repeat: int = 1) -> dict:
     """Run the sweep; dem: one engine or several separated by commas (an axis of the sweep:
     one curve each; the reference runs on the first); qoi: names compared with the reference
-    (default: compared_qoi)."""
+    (default: compared_qoi); repeat: rounds of the reference and every point (module
+    docstring), each run in a directory of its own (NAME-rK)."""
     sweep_points(case_name, sweep, base, ref_mode, ref_set, dem, mode)
     out.mkdir(parents=True, exist_ok=True)
     engines = dem.split(",")
     if mode != "fem" or ref_mode != "fem":  # import the engine once, so no run pays for it
         from dem_region.backends import make_backend
         make_backend("yade").finalize() if "yade" in engines else None
-    ref, cached = reference(case_name, {**base, **ref_set}, ref_mode, engines[0], out / "reference")
-    unknown = [q for q in qoi or [] if q not in ref["qoi"]]
-    if unknown:  # known only once the reference has run: refused before any sweep point runs
-        raise CaseError(f"--qoi {unknown[0]}: not a quantity of this case; allowed: {', '.join(ref['qoi'])}")
     keys = list(sweep)
+    combos = list(itertools.product(engines, itertools.product(*(sweep[k] for k in keys))))
+    refs, runs = [], [[] for _ in combos]  # each round's reference summary; each point's summaries
+    for r in range(repeat):
+        tag = f"-r{r + 1}" if repeat > 1 else ""
+        ref, cached = reference(case_name, {**base, **ref_set}, ref_mode, engines[0], out / f"reference{tag}",
+                                fresh=repeat > 1)
+        refs.append(ref)
+        unknown = [q for q in qoi or [] if q not in ref["qoi"]]
+        if unknown:  # known only once the reference has run: refused before any sweep point runs
+            raise CaseError(f"--qoi {unknown[0]}: not a quantity of this case; allowed: {', '.join(ref['qoi'])}")
+        for k, (engine, combo) in enumerate(combos):
+            name = "_".join(f"{key.split('.')[-1]}{v}" for key, v in zip(keys, combo)) or "base"
+            name = f"{engine}_{name}" if len(engines) > 1 else name
+            runs[k].append(execute(load_case(case_name, {**base, **dict(zip(keys, combo))}), mode, engine,
+                                   out / f"{name}{tag}", quiet=True)[2])
+    ref_walls = [ref["timing_s"]["total"] for ref in refs]
     points = []
-    for engine, combo in itertools.product(engines, itertools.product(*(sweep[k] for k in keys))):
-        sets = {**base, **dict(zip(keys, combo))}
-        case = load_case(case_name, sets)
-        name = "_".join(f"{k.split('.')[-1]}{v}" for k, v in zip(keys, combo)) or "base"
-        name = f"{engine}_{name}" if len(engines) > 1 else name
-        code, _, s = execute(case, mode, engine, out / name, quiet=True)
-        names = qoi or compared_qoi(case.parameters, s["qoi"], ref["qoi"])
-        errors = {q: abs(s["qoi"][q] - ref["qoi"][q]) / abs(ref["qoi"][q]) for q in names
-                  if q in s["qoi"] and q in ref["qoi"] and ref["qoi"][q]}
-        points.append({"setting": dict(zip(keys, combo)), "dem": engine, "status": s["status"], "wall_s": s["timing_s"]["total"],
+    for (engine, combo), mine in zip(combos, runs):
+        s = mine[0]  # (the qoi of the first round; the others' are the same when the runs repeat)
+        names = qoi or compared_qoi(load_case(case_name, {**base, **dict(zip(keys, combo))}).parameters, s["qoi"],
+                                    refs[0]["qoi"])
+        errors = {q: abs(s["qoi"][q] - refs[0]["qoi"][q]) / abs(refs[0]["qoi"][q]) for q in names
+                  if q in s["qoi"] and q in refs[0]["qoi"] and refs[0]["qoi"][q]}
+        walls = [run["timing_s"]["total"] for run in mine]
+        status = next((run["status"] for run in mine if run["status"] != "ok"), "ok")
+        points.append({"setting": dict(zip(keys, combo)), "dem": engine, "status": status,
+                       "wall_s": statistics.median(walls), "wall_s_runs": walls,
+                       "speedup": statistics.median(w_ref / w for w_ref, w in zip(ref_walls, walls)),
+                       "repeatable": all(_same_qoi(run["qoi"], s["qoi"]) for run in mine),
                        "timing_s": s["timing_s"], "qoi": s["qoi"], "rel_error": errors,
                        "max_rel_error": max(errors.values()) if errors else None})
     ok = [p for p in points if p["status"] == "ok" and p["max_rel_error"] is not None]
     front = pareto(np.array([p["wall_s"] for p in ok]), np.array([p["max_rel_error"] for p in ok])) if ok else []
     for i in front:
         ok[i]["pareto"] = True
-    result = {"case": case_name, "mode": mode, "dem": dem, "reference": {"mode": ref_mode, "set": ref_set,
-              "cached": cached, "wall_s": ref["timing_s"]["total"], "qoi": ref["qoi"]}, "points": points}
+    result = {"case": case_name, "mode": mode, "dem": dem, "repeat": repeat,
+              "reference": {"mode": ref_mode, "set": ref_set, "cached": cached, "wall_s": statistics.median(ref_walls),
+                            "wall_s_runs": ref_walls, "qoi": refs[0]["qoi"]}, "points": points}
     tmp = out / "speed_error.json.tmp"
     tmp.write_text(json.dumps(result, indent=1, default=str))
     os.replace(tmp, out / "speed_error.json")
     _plot(result, out / "speed_error.png")
     return result
+
+
+def _same_qoi(a: dict, b: dict) -> bool:
+    """The same quantities to the bit (a quantity never reached, None or nan, in both)."""
+    same = lambda x, y: x == y or (x is None and y is None) or (isinstance(x, float) and isinstance(y, float)
+                                                                and np.isnan(x) and np.isnan(y))
+    return a.keys() == b.keys() and all(same(a[k], b[k]) for k in a)
 
 
 def _plot(result: dict, path: Path) -> None:
@@ -175,6 +208,9 @@ def _plot(result: dict, path: Path) -> None:
 
 
 def cli(args) -> int:
+    if not 1 <= args.repeat <= 20:
+        raise CaseError(f"--repeat {args.repeat}: allowed an integer from 1 to 20 (rounds of the reference and "
+                        "every point)")
     sweep = parse_sweep(args.sweep)
     base = parse_set(args.set)
     ref_set = parse_set(args.reference_set)
@@ -182,16 +218,20 @@ def cli(args) -> int:
     from .run import study_dir
     out = study_dir(args.out, f"bench-{Path(args.case).stem}")
     try:
-        r = bench(args.case, sweep, base, args.reference_mode, ref_set, args.dem, args.mode, out, args.qoi or None)
+        r = bench(args.case, sweep, base, args.reference_mode, ref_set, args.dem, args.mode, out, args.qoi or None,
+                  args.repeat)
     except CaseError:  # (a --qoi the reference does not have): no half study left behind
         import shutil
         shutil.rmtree(out, ignore_errors=True)
         raise
-    print(f"reference: --mode {r['reference']['mode']} {r['reference']['set'] or ''} "
-          f"({'cached' if r['reference']['cached'] else 'run'}, {r['reference']['wall_s']:.2f} s)")
+    ref, n = r["reference"], args.repeat
+    how = f"{n} runs, median" if n > 1 else ("cached: run at another time," if ref["cached"] else "run")
+    print(f"reference: --mode {ref['mode']} {ref['set'] or ''} ({how} {ref['wall_s']:.2f} s)")
     for p in r["points"]:
         err = f"{p['max_rel_error']:.2e}" if p["max_rel_error"] is not None else "n/a"
-        print(f"  {p['dem'] + ' ' if ',' in args.dem else ''}{p['setting']}: {p['status']}, {p['wall_s']:.2f} s, max rel. error {err}"
-              f"{'  (Pareto)' if p.get('pareto') else ''}")
+        print(f"  {p['dem'] + ' ' if ',' in args.dem else ''}{p['setting']}: {p['status']}, {p['wall_s']:.2f} s"
+              f"{' (median)' if n > 1 else ''}, {p['speedup']:.2f} x the reference's speed, max rel. error {err}"
+              f"{'  (Pareto)' if p.get('pareto') else ''}"
+              f"{'' if p['repeatable'] else '  (its qoi differ between rounds: not repeatable)'}")
     print(f"  results: {out}/speed_error.json\n  plot:    {out}/speed_error.png")
     return 0

@@ -57,6 +57,9 @@ def _parser() -> argparse.ArgumentParser:
     b.add_argument("--reference-set", action="append", default=[], metavar="KEY=VALUE",
                    help="overrides of the reference run (e.g. the finest setting)")
     b.add_argument("--qoi", action="append", default=[], help="quantity of interest to compare (repeatable)")
+    b.add_argument("--repeat", type=int, default=1, metavar="N",
+                   help="rounds of the reference and every point, run side by side: medians of wall time and "
+                        "speedup (default 1, the reference from the cache if there)")
     c = sub.add_parser("compare", help="the same case on several DEM engines, side by side")
     c.add_argument("case")
     c.add_argument("--dem", required=True, help="comma-separated engines, e.g. yade,liggghts")

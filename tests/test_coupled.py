@@ -311,6 +311,41 @@ def test_bench_speed_against_error(tmp_path, monkeypatch, capsys):
     assert main(["bench", "chain_consistency", "--dem", "yade,fluent", "--out", str(tmp_path / "b4")]) == 2
 
 
+def test_a_repeated_bench_runs_its_reference_beside_its_points_and_reports_medians(tmp_path, monkeypatch, capsys):
+    """--repeat N: N rounds of the reference (run again, though cached) and every point, each
+    run in its own directory; each point's wall time is the median of its runs and its speedup
+    the median of the rounds' ratios of the reference's wall time to its own, its errors those
+    of a single bench (the runs repeat to the bit). A --repeat outside 1-20 is refused in one
+    line before anything is written."""
+    import json
+    import statistics
+    from coupling.cli import main
+    monkeypatch.setenv("FEMDEM_CACHE_DIR", str(tmp_path / "cache"))
+    args = ["bench", "chain_consistency", "--sweep", "clock.substeps=2", "--qoi", "tip_displacement_max"]
+    assert main(args + ["--out", str(tmp_path / "once")]) == 0
+    once = json.loads((tmp_path / "once" / "speed_error.json").read_text())
+    capsys.readouterr()
+    assert main(args + ["--repeat", "3", "--out", str(tmp_path / "b")]) == 0
+    assert "3 runs, median" in capsys.readouterr().out
+    r = json.loads((tmp_path / "b" / "speed_error.json").read_text())
+    ref = r["reference"]
+    assert not ref["cached"] and len(ref["wall_s_runs"]) == 3 and ref["wall_s"] == statistics.median(ref["wall_s_runs"])
+    assert all((tmp_path / "b" / name).is_dir() for name in ("reference-r1", "reference-r2", "reference-r3",
+                                                             "substeps2-r1", "substeps2-r2", "substeps2-r3"))
+    (p,) = r["points"]
+    assert p["status"] == "ok" and p["repeatable"] and len(p["wall_s_runs"]) == 3
+    assert p["wall_s"] == statistics.median(p["wall_s_runs"])
+    assert p["speedup"] == statistics.median(a / b for a, b in zip(ref["wall_s_runs"], p["wall_s_runs"]))
+    assert p["rel_error"] == once["points"][0]["rel_error"] and p["qoi"] == once["points"][0]["qoi"]
+    # a single bench's speedup is against its one reference run (here from the cache)
+    assert once["points"][0]["speedup"] == once["reference"]["wall_s"] / once["points"][0]["wall_s"]
+    for bad in ("0", "21"):
+        assert main(args + ["--repeat", bad, "--out", str(tmp_path / "bad")]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.count("\n") == 0 and f"--repeat {bad}" in err and "allowed" in err
+        assert not (tmp_path / "bad").exists()
+
+
 def test_a_bench_compares_the_structure_not_the_zone_s_own_diagnostics():
     """By default a bench compares every qoi both runs report but error measures, the model's
     size and the zone-edge probe's (an all-DEM reference reads the damage where the zone would
