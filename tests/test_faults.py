@@ -56,6 +56,9 @@ def _blocks_of(pid: int) -> list[str]:
 def test_killed_orchestrator_leaves_no_worker_or_shared_memory(tmp_path):
     proc = _start(tmp_path / "run")
     worker = _wait_for_worker(proc)
+    t0 = time.time()  # (on a loaded machine the worker may start well before the handshake's blocks)
+    while not _blocks_of(proc.pid) and time.time() - t0 < 60:
+        time.sleep(0.2)
     assert _blocks_of(proc.pid), "the orchestrator's blocks are named after it"
     os.kill(proc.pid, signal.SIGKILL)
     proc.wait()
