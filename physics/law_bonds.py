@@ -344,7 +344,8 @@ class LawBonds:
         return F[mask[:, 1]].sum(axis=0) - F[mask[:, 0]].sum(axis=0)
 
     def energies(self) -> dict[str, float]:
-        return {"kinetic": 0.0, "internal": self.stored_energy(), "dissipated": self.dissipated_energy()}
+        stored = self.stored_energy()  # (once: each sample of the ledger asks; dissipated_energy's own)
+        return {"kinetic": 0.0, "internal": stored, "dissipated": self.work - stored}
 
     def momentum(self) -> np.ndarray:
         return np.zeros(3)  # equal and opposite forces on particles the engine carries
