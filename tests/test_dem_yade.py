@@ -221,3 +221,36 @@ def test_a_process_that_used_yade_leaves_no_temporary_directory():
                        cwd=Path(__file__).resolve().parent.parent)
     made = Path(r.stdout.strip().splitlines()[-1])
     assert r.returncode == 0 and made.name.startswith("yade-") and not made.exists()
+
+
+@pytest.mark.parametrize("raised", [ValueError("a defect in the hook"), KeyboardInterrupt()])
+def test_what_the_hook_raises_reaches_the_caller_as_itself(capfd, raised):
+    """An exception in the coupling hook (YADE runs it from a PyRunner) reaches advance's caller
+    as itself, after the step, with nothing printed; and the engine steps on afterwards. Through
+    the PyRunner it became RuntimeError("PyRunner error") with its traceback on the terminal:
+    Ctrl-C and SIGTERM during a YADE run ended as an internal error, not as an interrupted run
+    left to resume."""
+    from dem_region.backends import make_backend
+    from dem_region.scene import DemScene
+    r, n = 0.001, 4
+    x = np.column_stack([2 * r * np.arange(n), np.zeros(n), np.zeros(n)])
+    eng = make_backend("yade")
+    try:
+        eng.build(DemScene(x, r, 2000.0, np.column_stack([np.arange(n - 1), np.arange(1, n)]), kn=1e6, ks=0.0,
+                           plane=True))
+        eng.set_dt(0.2 * eng.critical_dt())
+        calls = []
+        eng.start(lambda: calls.append(1))
+
+        def hook():
+            calls.append(1)
+            raise raised
+        with pytest.raises(type(raised)):
+            eng.advance(hook, 5)
+        assert len(calls) == 2  # the step that raised was the last
+        eng.advance(lambda: calls.append(1), 3)
+        assert len(calls) == 5
+    finally:
+        eng.finalize()
+    out, err = capfd.readouterr()
+    assert "Traceback" not in out + err and "PyRunner" not in out + err, err

@@ -124,6 +124,30 @@ def test_killed_orchestrator_leaves_no_lammps_rank_behind(tmp_path, sig):
     assert not left, f"shared memory left behind: {left}"
 
 
+def test_a_terminated_yade_run_closes_and_waits_to_resume(tmp_path):
+    """SIGTERM during a coupled run on YADE in process, whose coupling hook YADE calls from its
+    own loop: the run stops as an interrupted one (exit 143, one line, its partial directory and
+    checkpoint kept) and --resume finishes it; it had ended as an internal error with YADE's
+    traceback on the terminal."""
+    out = tmp_path / "run"
+    args = [sys.executable, "-m", "coupling.cli", "run", "coupled_vibration", "--dem", "yade", "--quiet",
+            "--set", "run.steps=20000", "--set", "output.checkpoint_every=2000"]
+    proc = subprocess.Popen([*args, "--out", str(out)], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)
+    partial = Path(str(out) + ".partial")
+    t0 = time.time()
+    while time.time() - t0 < 120 and proc.poll() is None and not (partial / "checkpoint" / "state.h5").exists():
+        time.sleep(0.1)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 143 and err.strip() == "femdem: terminated (SIGTERM)", (proc.returncode, err)
+    assert (partial / "checkpoint").is_dir() and not out.exists()
+    r = subprocess.run([sys.executable, "-m", "coupling.cli", "run", "--resume", str(partial), "--quiet"], cwd=ROOT,
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert json.loads((out / "summary.json").read_text())["status"] == "ok"
+
+
 def _as_nobody(cmd, cwd):
     return subprocess.run(["setpriv", "--reuid=65534", "--regid=65534", "--clear-groups", "env", "HOME=/nonexistent",
                            *cmd], cwd=cwd, capture_output=True, text=True)

@@ -71,6 +71,7 @@ class YadeBackend:
         self.version = self.yade.config.version
         self.O = self.yade.O
         self._between: Callable[[], None] | None = None
+        self._hook_error: BaseException | None = None  # raised in the hook, re-raised after the step
         self._starting = False  # inside start's zero step (energies() completes the half step there too)
 
     # -- set-up ----------------------------------------------------------------------------
@@ -153,8 +154,14 @@ class YadeBackend:
 
     # -- stepping ----------------------------------------------------------------------------
     def _hook(self) -> None:
+        """The coupling hook, from YADE's PyRunner. What it raises is kept and raised again
+        once the step is over (advance): through the PyRunner it became a RuntimeError("PyRunner
+        error") with the traceback printed on the terminal, Ctrl-C and SIGTERM among them."""
         if self._between is not None:
-            self._between()
+            try:
+                self._between()
+            except BaseException as exc:
+                self._hook_error = exc
 
     def start(self, between: Callable[[], None] | None = None) -> None:
         dt, self.O.dt = self.O.dt, 0.0  # a step of zero length: forces at x_0, then the hook
@@ -169,6 +176,9 @@ class YadeBackend:
         self._between = between
         for _ in range(steps):
             self.O.step()
+            if self._hook_error is not None:
+                exc, self._hook_error = self._hook_error, None
+                raise exc
 
     # -- interface data ----------------------------------------------------------------------
     def prescribe(self, ids: np.ndarray, dofs: str = "xyz") -> None:
