@@ -95,6 +95,11 @@ def sweep_points(case_name: str, sweep: dict[str, list[str]], base: dict, ref_mo
     for flag, m in (("--mode", mode), ("--reference-mode", ref_mode)):
         if m not in MODES:
             raise CaseError(f"{flag} {m}: allowed {', '.join(MODES)}")
+    load_case(case_name, base)  # the fixed values, then each swept one, named by their options
+    load_case(case_name, {**base, **ref_set}, "--reference-set")
+    for key, values in sweep.items():
+        for v in values:
+            load_case(case_name, {**base, key: v}, "--sweep")
     keys = list(sweep)
     todo = [(ref_mode, engines[0], {**base, **ref_set})]
     todo += [(mode, e, {**base, **dict(zip(keys, combo))})

@@ -77,12 +77,13 @@ def find_case(name_or_path: str) -> Path:
     return cases[name_or_path]
 
 
-def load_case(name_or_path: str, overrides: dict[str, Any] | None = None) -> Case:
-    """Read, validate and resolve a case; ``overrides`` are --set values (strings allowed)."""
+def load_case(name_or_path: str, overrides: dict[str, Any] | None = None, where: str = "--set") -> Case:
+    """Read, validate and resolve a case; ``overrides`` are --set values (strings allowed);
+    where: the option that gave them, for the error line (a bench's --sweep)."""
     path = find_case(name_or_path)
     data = _parse(path)
     if is_study(data):
-        return _load_study(path, data, overrides)
+        return _load_study(path, data, overrides, where)
     meta = data.pop("case", None)
     if not isinstance(meta, dict) or "scene" not in meta:
         raise CaseError(f"{path}: case.scene missing; allowed scenes: {', '.join(SCENES)}")
@@ -104,12 +105,12 @@ def load_case(name_or_path: str, overrides: dict[str, Any] | None = None) -> Cas
     schema = {**COMMON, **scene.PARAMETERS}
     params = resolve(schema, flatten(data), f"case file {path.name}", typed=True)
     if overrides:
-        resolve(schema, overrides, "--set")  # unknown keys, bad values
+        resolve(schema, overrides, where)  # unknown keys, bad values
         params.update({k: schema[k].coerce(k, v) for k, v in overrides.items()})
     return Case(name, scene, params, path.absolute(), meta.get("description", ""), frozenset(overrides or ()))
 
 
-def _load_study(path: Path, data: dict, overrides: dict[str, Any] | None) -> Case:
+def _load_study(path: Path, data: dict, overrides: dict[str, Any] | None, where: str = "--set") -> Case:
     """A study file: its schema from its own tables, then the same resolution as a scene's."""
     meta = data.get("case", {})
     name = meta.get("name", path.stem) if isinstance(meta, dict) else path.stem
@@ -121,11 +122,11 @@ def _load_study(path: Path, data: dict, overrides: dict[str, Any] | None) -> Cas
     given = flatten({k: v for k, v in data.items() if k not in ("case", "ranges")})
     params = resolve(schema, given, f"case file {path.name}", typed=True)
     if overrides:
-        resolve(schema, overrides, "--set", renamed=lambda key: renamed(key, study))
+        resolve(schema, overrides, where, renamed=lambda key: renamed(key, study))
         fixed = sorted(k for k in overrides if study.structural(k) and schema[k].coerce(k, overrides[k]) != params[k])
         if fixed:
             raise CaseError(f"{fixed[0]}: says what the table is; allowed: change it in the case file "
-                            f"({path.name}), not with --set")
+                            f"({path.name}), not with {where}")
         params.update({k: schema[k].coerce(k, v) for k, v in overrides.items()})
     study.resolve_files(params, path.absolute().parent)
     return Case(name, study, params, path.absolute(), study.DESCRIPTION, frozenset(overrides or ()))

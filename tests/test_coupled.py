@@ -344,6 +344,13 @@ def test_a_repeated_bench_runs_its_reference_beside_its_points_and_reports_media
         err = capsys.readouterr().err.strip()
         assert err.count("\n") == 0 and f"--repeat {bad}" in err and "allowed" in err
         assert not (tmp_path / "bad").exists()
+    # a key unknown to the case is named with the option that gave it
+    for option in ("--sweep", "--set", "--reference-set"):
+        value = "clock.nope=1,2" if option == "--sweep" else "clock.nope=1"
+        assert main(["bench", "chain_consistency", option, value, "--out", str(tmp_path / "bad")]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.count("\n") == 0 and f"clock.nope: unknown key in {option};" in err, err
+        assert not (tmp_path / "bad").exists()
 
 
 def test_a_bench_compares_the_structure_not_the_zone_s_own_diagnostics():
