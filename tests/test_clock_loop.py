@@ -7,7 +7,7 @@ from hypothesis import given, settings, strategies as st
 from coupling.simulation import FieldFrame, Simulation, Stage, run_clock
 
 
-@settings(max_examples=25, deadline=None)  # (60 with HYPOTHESIS_PROFILE=explore's new draws each run: 16 s)
+@settings(max_examples=25, deadline=None)  # (60 took 16 s of the suite; HYPOTHESIS_PROFILE=explore draws new ones)
 @given(n=st.integers(1, 400), every=st.integers(1, 60), frames=st.integers(0, 12), save_every=st.integers(0, 90),
        in_blocks=st.booleans())
 def test_blocks_of_steps_sample_draw_and_save_where_the_step_by_step_loop_does(tmp_path_factory, n, every, frames,
