@@ -200,12 +200,18 @@ class YadeBackend:
 
     def advance(self, between: Callable[[], None] | None = None, steps: int = 1) -> None:
         self._between = between
-        with _interrupts_after_the_step():  # (delivered at the end of these steps: at most a sample's)
-            for _ in range(steps):
-                self.O.step()
-                if self._hook_error is not None:
-                    exc, self._hook_error = self._hook_error, None
-                    raise exc
+        if callable(signal.getsignal(signal.SIGINT)) or callable(signal.getsignal(signal.SIGTERM)):
+            with _interrupts_after_the_step():  # (delivered at the end of these steps: at most a sample's)
+                self._steps(steps)
+        else:  # nothing in Python would run on them (an engine's worker, step by step): as they come
+            self._steps(steps)
+
+    def _steps(self, steps: int) -> None:
+        for _ in range(steps):
+            self.O.step()
+            if self._hook_error is not None:
+                exc, self._hook_error = self._hook_error, None
+                raise exc
 
     # -- interface data ----------------------------------------------------------------------
     def prescribe(self, ids: np.ndarray, dofs: str = "xyz") -> None:
