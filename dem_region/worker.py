@@ -150,7 +150,7 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
              "models": [], "view": None, "models_dt": 0.0, "in_models": 0.0, "in_interface": 0.0, "ask": False,
              "bell": None, "hooks": 0, "advances": 0, "state_shm": None, "state_views": None, "state_entries": None,
              "write_states": False, "ranks": None,
-             "go_wait": None, "advance_wait": None}
+             "go_wait": None, "advance_wait": None, "finalized": False}
 
     def between():
         """The engine's coupling hook: the hosted models' step, interface forces out, then serve
@@ -363,7 +363,7 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
         while serve_one():
             pass
     except (EOFError, ConnectionError):  # the orchestrator is gone: stop, and let the engine shut down cleanly
-        if not state.get("finalized"):  # (after the engine's finalize MPI is not used again)
+        if not state["finalized"]:  # (after the engine's finalize MPI is not used again)
             conn.tell_stop()
             backend.finalize()
     except _Finalized:
