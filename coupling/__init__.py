@@ -38,3 +38,8 @@ for _var, _sub in (("NUMBA_CACHE_DIR", "numba"), ("MPLCONFIGDIR", "matplotlib"))
     if not _writable(Path(os.environ.get(_var) or CACHE / _sub)):  # e.g. inherited from another user
         os.environ[_var] = str(CACHE / _sub)
     os.environ.setdefault(_var, str(CACHE / _sub))
+# in it, a directory per version of the kernels' sources (numba's own check misses a change in
+# a kernel's callee: physics/kernel_cache.py)
+from physics.kernel_cache import cache_dir as _kernel_cache  # noqa: E402 (standard library only)
+
+os.environ["NUMBA_CACHE_DIR"] = str(_kernel_cache(os.environ["NUMBA_CACHE_DIR"]))

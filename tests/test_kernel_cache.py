@@ -1,0 +1,66 @@
+"""The compiled kernels' disk cache follows every change of the sources that define kernels
+(physics/kernel_cache.py): numba's own check misses a change in a kernel's callee."""
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import time
+
+from physics.kernel_cache import PREFIX, UNUSED_DAYS, cache_dir, sources_digest
+
+CALLER = "from numba import njit\nfrom .callee import g\n\n\n@njit(cache=True)\ndef f(x):\n    return g(x) + 1.0\n"
+CALLEE = "from numba import njit\n\n\n@njit(cache=True)\ndef g(x):\n    return {k} * x\n"
+
+
+def _tree(root, k):
+    pkg = root / "physics"
+    pkg.mkdir(parents=True, exist_ok=True)
+    (pkg / "__init__.py").write_text("")
+    (pkg / "caller.py").write_text(CALLER)
+    (pkg / "callee.py").write_text(CALLEE.format(k=k))
+
+
+def _f_of_one(root, numba_dir) -> float:
+    """f(1.0) computed in a fresh process with the kernels cached in numba_dir."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(numba_dir), "PYTHONPATH": str(root)}
+    out = subprocess.run([sys.executable, "-c", "from physics.caller import f; print(f(1.0))"], env=env, cwd=root,
+                         capture_output=True, text=True, check=True)
+    return float(out.stdout)
+
+
+def test_a_changed_callee_is_compiled_anew(tmp_path):
+    """Only the callee's file changes (g: 2 x -> 3 x): numba's cache alone keeps the caller's old
+    machine code (the control, which shows the test can fail); the digest's directory does not."""
+    root = tmp_path / "src"
+    _tree(root, 2.0)
+    plain = tmp_path / "plain"
+    assert _f_of_one(root, plain) == 3.0 and _f_of_one(root, cache_dir(tmp_path / "digest", root)) == 3.0
+    time.sleep(0.01)
+    (root / "physics" / "callee.py").write_text(CALLEE.format(k=3.0))
+    assert _f_of_one(root, plain) == 3.0  # stale: f(1) = 2 * 1 + 1 still, where g now gives 3
+    assert _f_of_one(root, cache_dir(tmp_path / "digest", root)) == 4.0
+
+
+def test_the_digest_follows_kernel_files_only(tmp_path):
+    _tree(tmp_path, 2.0)
+    d0 = sources_digest(tmp_path)
+    (tmp_path / "physics" / "notes.py").write_text("X = 1  # no kernel here\n")
+    assert sources_digest(tmp_path) == d0
+    (tmp_path / "physics" / "caller.py").write_text(CALLER + "# a comment\n")
+    assert sources_digest(tmp_path) != d0
+
+
+def test_the_cache_directory_is_inherited_and_old_versions_go(tmp_path):
+    _tree(tmp_path, 2.0)
+    base = tmp_path / "numba"
+    mine = cache_dir(base, tmp_path)
+    assert mine.parent == base and mine.name == PREFIX + sources_digest(tmp_path)
+    assert cache_dir(mine, tmp_path) == mine  # a child process given the directory keeps it
+    old, recent = base / f"{PREFIX}0000000000000000", base / f"{PREFIX}1111111111111111"
+    old.mkdir(), recent.mkdir()
+    (old / "x.nbi").write_text("")
+    then = time.time() - (UNUSED_DAYS + 1) * 86400
+    os.utime(old, (then, then))
+    cache_dir(base, tmp_path)
+    assert not old.exists() and recent.exists() and mine.exists()
