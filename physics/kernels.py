@@ -79,7 +79,8 @@ def hoffman_coefficients(k):
     """The Hoffman index's nine coefficients from the strengths k = (Xt, Xc, Yt, Yc, Zt, Zc,
     S23, S13, S12) Pa: three quadratic, three linear, and the shear terms' 1 / S^2 (a product
     per shear term where a division was: the initiation check of every intact ply bond at
-    every step, 24 -> 14 ns a bond on the seed beam's zone, docs/benchmarks.md session 45)."""
+    every step; the 925 ply bonds of the seed beam's 2-ply zone took 67-73 us a step, now
+    50-52 us, docs/benchmarks.md session 45)."""
     Xt, Xc, Yt, Yc, Zt, Zc, S23, S13, S12 = k
     X, Y, Z = 1 / (Xt * Xc), 1 / (Yt * Yc), 1 / (Zt * Zc)
     return (0.5 * (Y + Z - X), 0.5 * (Z + X - Y), 0.5 * (X + Y - Z),
