@@ -54,6 +54,9 @@ class RunOutput:
 
     def __init__(self, final_dir: Path, resume: bool = False, unique: bool = False, restart: bool = False):
         final = Path(final_dir).absolute()  # a worker process writes here from its own cwd
+        if final.is_symlink():  # the run is published by renaming DIR.partial to DIR, which a link
+            final = final.resolve()  # is not: it goes where the link points (made there if dangling)
+        final_dir = final
         self.made: list[Path] = []
         for parent in final.parents:
             if parent.exists():

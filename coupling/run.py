@@ -126,24 +126,26 @@ def _why_no_checkpoint(sim, dem: str) -> str:
 
 
 def open_output(out: Path, resume: bool, unique: bool, restart: bool = False) -> RunOutput:
-    """The run's writer, or a one-line CaseError for a --out that cannot hold a run."""
+    """The run's writer, or a one-line CaseError for a --out (--resume) that cannot hold a run."""
     out = Path(out)
+    opt = "--resume" if resume else "--out"
     try:
         return RunOutput(out, resume=resume, unique=unique, restart=restart)
     except RunInProgress as exc:
-        raise CaseError(f"--out {out}: {exc} belongs to a run that is still going (its process holds "
+        raise CaseError(f"{opt} {out}: {exc} belongs to a run that is still going (its process holds "
                         "run.lock); allowed: wait for it, or another directory") from None
     except FileExistsError as exc:
         if str(exc).endswith(".partial"):
-            raise CaseError(f"--out {out}: {exc} exists (a run in progress, or stopped: continue it with "
+            raise CaseError(f"{opt} {out}: {exc} exists (a run in progress, or stopped: continue it with "
                             f"--resume {exc}); allowed: a new or empty directory") from None
-        raise CaseError(f"--out {out}: exists and is not an empty directory; allowed: a new or empty directory") from None
+        what = "is a file" if out.exists() and not out.is_dir() else "is not an empty directory"
+        raise CaseError(f"{opt} {out}: exists and {what}; allowed: a new or empty directory") from None
     except NotADirectoryError:
-        raise CaseError(f"--out {out}: a parent of it is a file; allowed: a directory path") from None
+        raise CaseError(f"{opt} {out}: a parent of it is a file; allowed: a directory path") from None
     except PermissionError:
-        raise CaseError(f"--out {out}: not writable by this user; allowed: a directory you can write") from None
+        raise CaseError(f"{opt} {out}: not writable by this user; allowed: a directory you can write") from None
     except OSError as exc:
-        raise CaseError(f"--out {out}: cannot be created ({exc.strerror}); allowed: a writable directory path") from None
+        raise CaseError(f"{opt} {out}: cannot be created ({exc.strerror}); allowed: a writable directory path") from None
 
 
 def study_dir(out: str | None, name: str) -> Path:
@@ -223,7 +225,11 @@ def resume(run_dir: Path, quiet: bool) -> tuple[int, Path, dict]:
             raise CaseError(f"{where}: this run finished ({status}); allowed: the directory of a stopped run "
                             "(killed, or ended with an error and kept its checkpoint)")
         # ended with an error (e.g. its engine worker was killed): back to .partial, continue
-        os.replace(final, partial)
+        try:
+            os.replace(final, partial)
+        except PermissionError:
+            raise CaseError(f"{where}: not writable by this user (the run continues in {partial.name}); "
+                            "allowed: a run directory you can write") from None
         os.replace(partial / "summary.json", partial / "summary.failed.json")
     info_path = partial / "run.json"
     ck_dir = checkpoint.latest(partial) if partial.is_dir() else None

@@ -192,3 +192,38 @@ def test_a_run_whose_reader_left_finishes_and_keeps_its_results(tmp_path):
     assert (r.returncode, s["status"]) == (0, "ok"), s["message"]
     assert any("beam theory's peak load (LEFM) does not apply" in w for w in s["warnings"])
     assert not (out / "error.log").exists()
+
+
+@pytest.mark.parametrize("target", ["empty", "dangling"])
+def test_a_linked_out_directory_publishes_the_run_where_it_points(tmp_path, capsys, target):
+    """--out a symbolic link (to an empty directory, or dangling): the run is published where the
+    link points and read through it. It ran to its end and then failed to rename DIR.partial onto
+    the link (internal error, exit 1), its result left in DIR.partial."""
+    from coupling.cli import main
+    where = tmp_path / "target"
+    if target == "empty":
+        where.mkdir()
+    link = tmp_path / "link"
+    link.symlink_to(where)
+    assert main(["run", "bar_wave", "--set", "clock.t_end=2e-5", "--out", str(link), "--quiet"]) == 0
+    assert json.loads((link / "summary.json").read_text())["status"] == "ok"
+    assert (where / "history.h5").is_file() and link.is_symlink()
+    assert not list(tmp_path.glob("*.partial"))
+
+
+def test_resuming_a_run_this_user_cannot_write_is_refused_in_one_line(tmp_path, capsys, monkeypatch):
+    """--resume of a run that ended with an error, in a directory this user cannot rename (another
+    user's): one line naming --resume, exit 2 (it was an internal error, exit 1)."""
+    from coupling import checkpoint, run
+    from coupling.cli import main
+    final = tmp_path / "stopped"
+    final.mkdir()
+    (final / "summary.json").write_text(json.dumps({"status": "error"}))
+
+    def refused(src, dst):
+        raise PermissionError(13, "Permission denied", str(src))
+    monkeypatch.setattr(checkpoint, "latest", lambda d: d / "checkpoint")
+    monkeypatch.setattr(run.os, "replace", refused)
+    assert main(["run", "--resume", str(final), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"femdem: --resume {final}: not writable by this user"), err
