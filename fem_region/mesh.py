@@ -4,6 +4,8 @@ Returns scikit-fem meshes; coordinates in m.
 """
 from __future__ import annotations
 
+import contextlib
+import io
 from pathlib import Path
 
 import numpy as np
@@ -170,10 +172,14 @@ def read_gmsh(path: str | Path, part: str) -> tuple[skfem.Mesh, dict[str, np.nda
     import meshio
     if not Path(path).is_file():
         raise OSError(f"no such file: {path}")
+    said = io.StringIO()
     try:
-        m = meshio.read(str(path))
-    except Exception as exc:  # meshio's parsers raise what they meet (KeyError, IndexError, ...)
-        raise ValueError(f"meshio cannot read it ({type(exc).__name__}: {exc})") from None
+        with contextlib.redirect_stdout(said), contextlib.redirect_stderr(said):
+            m = meshio.read(str(path))
+    except (Exception, SystemExit) as exc:  # meshio's parsers raise what they meet (KeyError, IndexError,
+        # ...); a file no parser takes, meshio reports on the terminal and exits the process
+        why = " ".join(said.getvalue().split()) or f"{type(exc).__name__}: {exc}"
+        raise ValueError(f"meshio cannot read it ({why})") from None
     kinds = {"quad": skfem.MeshQuad1, "triangle": skfem.MeshTri1, "hexahedron": skfem.MeshHex1,
              "tetra": skfem.MeshTet1}
     groups = {k: v for k, v in m.cell_sets.items() if not k.startswith("gmsh:")}

@@ -855,13 +855,20 @@ def test_a_3d_mesh_file_that_does_not_fit_is_refused(femdem, tmp_path, sets, wor
         assert w in err, err
 
 
-@pytest.mark.parametrize("damage", ["cut off half way", "an element block of an undeclared entity"])
+@pytest.mark.parametrize("damage", ["cut off half way", "an element block of an undeclared entity", "not a mesh",
+                                    "a header only"])
 def test_a_mesh_file_meshio_cannot_read_is_refused(femdem, tmp_path, damage):
     """A damaged .msh is bad input: one line naming the key and the file, exit 2, before
     anything is written. meshio's parser raises what it meets: a ValueError for the cut file,
-    a KeyError for the undeclared entity (which was exit 1, "error" with a traceback's last line)."""
+    a KeyError for the undeclared entity (which was exit 1, "error" with a traceback's last line);
+    a file no parser takes it reports on the terminal and exits the process (exit 1, meshio's
+    line, a run directory left)."""
     text = (ROOT / "tests" / "studies" / "gmsh_beam.msh").read_text()
-    if damage == "cut off half way":
+    if damage == "not a mesh":
+        text = "garbage\n"
+    elif damage == "a header only":
+        text = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n"
+    elif damage == "cut off half way":
         text = text[: len(text) // 2]
     else:  # the first block of surface elements (header "2 TAG 3 COUNT") under an entity tag the file never declares
         head, elements = text.split("$Elements\n", 1)
@@ -874,7 +881,7 @@ def test_a_mesh_file_meshio_cannot_read_is_refused(femdem, tmp_path, damage):
     code, s, err = femdem("run", str(GMSH), "--mode", "fem", f"--set=mesh.file={bad}")
     assert code == 2 and s is None and err.count("\n") == 1, err
     assert "mesh.file" in err and "bad.msh" in err and "cannot read" in err, err
-    assert not (tmp_path / "run0").exists()  # (the fixture's run directory)
+    assert not (tmp_path / "run0").exists() and not (tmp_path / "run0.partial").exists()  # (the fixture's run)
 
 
 @pytest.mark.parametrize("args, words", [
