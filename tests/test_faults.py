@@ -227,3 +227,16 @@ def test_resuming_a_run_this_user_cannot_write_is_refused_in_one_line(tmp_path, 
     assert main(["run", "--resume", str(final), "--quiet"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith(f"femdem: --resume {final}: not writable by this user"), err
+
+
+def test_ctrl_c_while_the_command_imports_is_one_line(tmp_path):
+    """Ctrl-C in the command's first seconds (its modules importing: numba, scipy, the scenes)
+    ends it as during a run: exit 130, one line; it printed the import's traceback."""
+    femdem = str(Path(sys.executable).parent / "femdem")
+    for delay in (0.2, 0.6):
+        proc = subprocess.Popen([femdem, "run", "free_vibration", "--out", str(tmp_path / f"r{delay}"), "--quiet"],
+                                cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        time.sleep(delay)
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=120)
+        assert (proc.returncode, err) == (130, "femdem: interrupted\n"), (delay, proc.returncode, err)
