@@ -15,6 +15,8 @@ from pathlib import Path
 import h5py
 import numpy as np
 
+from .output import write_h5
+
 
 def _write(group: h5py.Group, tree: dict) -> None:
     for k, v in tree.items():
@@ -43,12 +45,9 @@ def write(run_dir: Path, state: dict, engine_save=None) -> None:
     tmp, final, old = run_dir / "checkpoint.tmp", run_dir / "checkpoint", run_dir / "checkpoint.old"
     shutil.rmtree(tmp, ignore_errors=True)
     tmp.mkdir()
-    with h5py.File(tmp / "state.h5", "w") as h5:
-        _write(h5, state)
+    write_h5(tmp / "state.h5", lambda h5: _write(h5, state), fsync=True)
     if engine_save is not None:
         engine_save(tmp)
-    with open(tmp / "state.h5", "rb") as f:
-        os.fsync(f.fileno())
     if final.exists():
         shutil.rmtree(old, ignore_errors=True)
         os.replace(final, old)

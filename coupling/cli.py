@@ -9,6 +9,7 @@ can checkpoint in its ``.partial`` directory for ``--resume``.
 from __future__ import annotations
 
 import argparse
+import functools
 import os
 import signal
 import sys
@@ -120,6 +121,8 @@ def main(argv: list[str] | None = None) -> int:
     # always: tests/test_faults.py). Handled while main runs (a caller's handler is put back).
     on_main = threading.current_thread() is threading.main_thread()
     previous = signal.signal(signal.SIGTERM, _terminate) if on_main else None
+    # errors in finalizers (h5py's objects of a file whose write failed) go to the log, not the terminal
+    unraisable, sys.unraisablehook = sys.unraisablehook, _log_unraisable
     try:
         return _main(argv)
     except KeyboardInterrupt:
@@ -129,24 +132,48 @@ def main(argv: list[str] | None = None) -> int:
         print("femdem: terminated (SIGTERM)", file=sys.stderr)
         return 143
     except Exception as exc:  # a defect: one line here, the traceback in a log
+        from .run import OutOfSpace
+        if isinstance(exc, OutOfSpace):  # (the run's device filled: not a defect)
+            print(f"femdem: {exc}", file=sys.stderr)
+            return 1
         log = _log_traceback()
         print(f"femdem: internal error: {type(exc).__name__}: {exc} (traceback in {log})", file=sys.stderr)
         return 1
     finally:
         if on_main:
             signal.signal(signal.SIGTERM, previous)
+        sys.unraisablehook = unraisable
         for stream in (sys.stdout, sys.stderr):  # now, where a closed pipe is caught, not at exit
             stream.flush()
         sys.stdout, sys.stderr = streams
 
 
-def _log_traceback() -> Path:
-    import datetime
+def _log_unraisable(u) -> None:
+    """sys.unraisablehook: the exception's traceback into this process's log (never raises)."""
     import traceback
+    try:
+        with _log_path().open("a") as f:
+            f.write(f"{u.err_msg or 'Exception ignored in'}: {u.object!r}\n"
+                    + "".join(traceback.format_exception(u.exc_type, u.exc_value, u.exc_traceback)))
+    except Exception:  # (its device full too)
+        pass
+
+
+@functools.lru_cache(maxsize=None)
+def _log_path() -> Path:
+    """This process's log of what the terminal is spared (one file, made at the first use)."""
+    import datetime
     from . import CACHE
     log = CACHE / "logs" / f"femdem-{datetime.datetime.now():%Y%m%d-%H%M%S}-{os.getpid()}.log"
     log.parent.mkdir(parents=True, exist_ok=True)
-    log.write_text(f"femdem {' '.join(sys.argv[1:])}\n{traceback.format_exc()}")
+    return log
+
+
+def _log_traceback() -> Path:
+    import traceback
+    log = _log_path()
+    with log.open("a") as f:
+        f.write(f"femdem {' '.join(sys.argv[1:])}\n{traceback.format_exc()}")
     return log
 
 

@@ -6,6 +6,7 @@ half-written result where a finished one is expected.
 """
 from __future__ import annotations
 
+import errno
 import fcntl
 import json
 import os
@@ -168,6 +169,11 @@ class RunOutput:
         files = sorted(d.glob("frame-*.h5"))
         if not files:
             return
+        # meshio writes fields.h5 through HDF5, which a full device leaves half-closed (write_h5):
+        # the room for it (what the frames and meshes take, and a margin) is asked for first
+        need = 1.1 * sum(f.stat().st_size for f in d.iterdir()) + 2**20
+        if shutil.disk_usage(self.dir).free < need:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(self.dir))
         groups: dict[str, list] = {}
         for f in files:
             with h5py.File(f, "r") as h5:
@@ -191,11 +197,12 @@ class RunOutput:
         """Write history.h5 and summary.json, close the fields, publish the directory; the
         last checkpoint stays with a run that did not finish well (to restart it)."""
         self._write_xdmf(keep_frames=keep_checkpoint)
-        with h5py.File(self.dir / "history.h5", "w") as h5:
+        def fill(h5):
             g = h5.create_group("history")
             for k, v in history.items():
                 g.create_dataset(k, data=np.asarray(v, dtype=float))
             g.attrs["units"] = "SI"
+        write_h5(self.dir / "history.h5", fill)
         tmp = self.dir / "summary.json.tmp"
         tmp.write_text(json.dumps(_no_nan(summary), indent=2, default=_jsonable, allow_nan=False) + "\n")
         os.replace(tmp, self.dir / "summary.json")
@@ -223,10 +230,28 @@ def _no_nan(x):
     return x
 
 
+def write_h5(path: Path, fill, fsync: bool = False) -> None:
+    """path <- the HDF5 file ``fill(h5)`` makes, built in memory and written in one go. On a
+    full device the write fails as any file's does, and what it wrote is removed: HDF5 failing
+    to flush its own file left it half-closed, and freeing that file crashed the process
+    (segmentation fault, after h5py's tracebacks on the terminal)."""
+    with h5py.File(path.name, "w", driver="core", backing_store=False) as h5:
+        fill(h5)
+        h5.flush()
+        image = h5.id.get_file_image()
+    try:
+        with open(path, "wb") as f:
+            f.write(image)
+            if fsync:
+                os.fsync(f.fileno())
+    except BaseException:
+        path.unlink(missing_ok=True)
+        raise
+
+
 def _write_atomic(path: Path, fill) -> None:
     tmp = path.with_suffix(".tmp")
-    with h5py.File(tmp, "w") as h5:
-        fill(h5)
+    write_h5(tmp, fill)
     os.replace(tmp, path)
 
 

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import datetime as dt
+import errno
 import os
 import platform
 import resource
@@ -14,6 +15,19 @@ from .case import Case
 from .output import SCRATCH, RunInProgress, RunOutput
 from .params import CaseError
 from .simulation import Instability, run_clock
+
+
+class OutOfSpace(Exception):
+    """The run's device filled up (or its quota): the run stopped, its directory kept as written."""
+
+    def __init__(self, run_dir: Path, exc: OSError, started: bool = True):
+        what = (f"the run stopped and is kept there as written: free space, then --resume {run_dir}" if started
+                else "nothing was run")
+        super().__init__(f"no space left on the device of {run_dir} ({os.strerror(exc.errno)}); {what}")
+
+
+def _full(exc: BaseException) -> bool:
+    return isinstance(exc, OSError) and exc.errno in (errno.ENOSPC, errno.EDQUOT)
 
 
 def default_out(case: Case, mode: str, dem: str) -> Path:
@@ -32,8 +46,15 @@ def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool,
         raise CaseError(f"--mode {mode}: case {case.name} supports {', '.join(scene.MODES)}")
     writer = open_output(out or default_out(case, mode, dem), resume_from is not None or restart, unique=not out,
                          restart=restart)
-    checkpoint.write_run_info(writer.dir, {"case": case.name, "case_file": str(case.path), "mode": mode, "dem": dem,
-                                           "parameters": case.parameters})
+    try:
+        checkpoint.write_run_info(writer.dir, {"case": case.name, "case_file": str(case.path), "mode": mode,
+                                               "dem": dem, "parameters": case.parameters})
+    except OSError as exc:
+        if not _full(exc):
+            raise
+        if resume_from is None and not restart:
+            writer_cleanup(writer)
+        raise OutOfSpace(writer.final, exc, started=False) from None
     t_start = time.perf_counter()
     os.environ["FEMDEM_SCRATCH_DIR"] = str(writer.dir / SCRATCH)  # engines' files stay in the run
     sim, result, qoi, checks, printed = None, None, {}, {}, 0
@@ -92,6 +113,8 @@ def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool,
         raise CaseError(f"--resume {writer.dir}: {exc}; allowed: a checkpoint as its run wrote it (or the case run "
                         "again from its start)") from None
     except Exception as exc:  # a defect or an engine failure: say so in the run directory too
+        if _full(exc):  # not the run's failure: nothing more is written, and it can go on later
+            raise OutOfSpace(writer.dir, exc) from None
         import traceback
         (writer.dir / "error.log").write_text(traceback.format_exc())
         status, message = "error", f"{type(exc).__name__}: {exc} (traceback in {writer.final / 'error.log'})"
@@ -115,7 +138,12 @@ def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool,
         "energy": result["energy"], "qoi": qoi, "checks": checks, "status": status, "message": message,
         "warnings": sim.warnings if sim else [],
     }
-    final = writer.finish(summary, result["history"], keep_checkpoint=status != "ok")
+    try:
+        final = writer.finish(summary, result["history"], keep_checkpoint=status != "ok")
+    except OSError as exc:
+        if _full(exc):
+            raise OutOfSpace(writer.dir, exc) from None
+        raise
     return {"ok": 0, "unstable": 3, "error": 1}[status], final, summary
 
 

@@ -240,3 +240,32 @@ def test_ctrl_c_while_the_command_imports_is_one_line(tmp_path):
         proc.send_signal(signal.SIGINT)
         _, err = proc.communicate(timeout=120)
         assert (proc.returncode, err) == (130, "femdem: interrupted\n"), (delay, proc.returncode, err)
+
+
+@pytest.mark.skipif(os.geteuid() != 0 or not shutil.which("mount"), reason="needs root to mount a small tmpfs")
+def test_a_full_device_stops_the_run_in_one_line_and_it_resumes(tmp_path):
+    """The run's device fills up (a 200 KB tmpfs; bar_wave's frames take more): one line naming
+    the run's directory, exit 1, no traceback, the directory kept; with room again --resume
+    finishes it. HDF5, failing to flush, left its file half-closed: h5py's tracebacks on the
+    terminal, then a segmentation fault (exit 139) as the file was freed."""
+    dev = tmp_path / "dev"
+    dev.mkdir()
+    if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=200k", "tmpfs", str(dev)]).returncode:
+        pytest.skip("tmpfs cannot be mounted here")
+    try:
+        femdem = str(Path(sys.executable).parent / "femdem")
+        out = dev / "run"
+        r = subprocess.run([femdem, "run", "bar_wave", "--set", "clock.t_end=1e-6", "--quiet", "--out", str(out)],
+                           cwd=tmp_path, capture_output=True, text=True, timeout=300)
+        partial = dev / "run.partial"
+        assert r.returncode == 1, (r.returncode, r.stderr)
+        assert r.stderr == (f"femdem: no space left on the device of {partial} (No space left on device); the run "
+                            f"stopped and is kept there as written: free space, then --resume {partial}\n"), r.stderr
+        assert (partial / "run.json").is_file() and not out.exists()
+        assert subprocess.run(["mount", "-o", "remount,size=64m", str(dev)]).returncode == 0
+        r = subprocess.run([femdem, "run", "--resume", str(partial), "--quiet"], cwd=tmp_path, capture_output=True,
+                           text=True, timeout=300)
+        assert r.returncode == 0, r.stderr
+        assert json.loads((out / "summary.json").read_text())["status"] == "ok"
+    finally:
+        subprocess.run(["umount", "-l", str(dev)])
