@@ -3,9 +3,12 @@
 Every sweep point is a normal run (its own run directory under the bench directory); its
 error is the relative difference of each quantity of interest from the reference run (by
 default the same case in ``--mode dem``, the whole domain as particles, or a run with
-``--reference-set`` overrides, e.g. the finest setting). References are cached by their
-resolved parameters, mode and engine, so sweeps reuse them. Writes speed_error.json and
-speed_error.png (wall time against error, the Pareto front marked).
+``--reference-set`` overrides, e.g. the finest setting). A quantity never reached (nan, None)
+in a run, or 0 in the reference, has no relative error: it is listed as not compared, with why;
+a point with a quantity reached in one of the two runs only has no max error (n/a: no number
+measures that) and is never on the Pareto front. References are cached by their resolved
+parameters, mode and engine and the contents of the files they name, so sweeps reuse them.
+Writes speed_error.json and speed_error.png (wall time against error, the Pareto front marked).
 
 Speed is a ratio measured side by side: each point's ``speedup`` is the reference's wall time
 over its own. A cached reference ran at another hour (this VM's speed moves by a third from hour
@@ -19,13 +22,15 @@ from __future__ import annotations
 import hashlib
 import itertools
 import json
+import math
+import numbers
 import os
 import statistics
 from pathlib import Path
 
 import numpy as np
 
-from .case import load_case
+from .case import Case, load_case
 from .params import CaseError, parse_set
 from .run import execute
 
@@ -35,9 +40,34 @@ def _cache_dir() -> Path:
     return Path(os.environ.get("FEMDEM_CACHE_DIR") or CACHE) / "references"
 
 
-def _key(parameters: dict, mode: str, dem: str) -> str:
-    blob = json.dumps({"p": parameters, "mode": mode, "dem": dem}, sort_keys=True, default=str)
+def _key(case: Case, mode: str, dem: str) -> str:
+    """The cache's name for a reference run: its parameters, mode and engine, and the contents
+    of the files they name (a load curve's CSV edited in place is another reference)."""
+    key = {"p": case.parameters, "mode": mode, "dem": dem}
+    files = _file_digests(case)
+    if files:  # (only then: a case without files keeps the key, and the cached run, it had)
+        key["files"] = files
+    blob = json.dumps(key, sort_keys=True, default=str)
     return hashlib.sha1(blob.encode()).hexdigest()[:20]
+
+
+def _file_digests(case: Case) -> dict[str, str]:
+    """{key: sha1 of the file's bytes} of every parameter that names a file (``mesh.file``,
+    ``loads.NAME.file``), a relative path read from the case file's folder as load_case does;
+    a file that cannot be read is named "unreadable" (the run itself then says why)."""
+    digests = {}
+    for key, value in case.parameters.items():
+        leaf = key.rsplit(".", 1)[-1]
+        if not ((leaf == "file" or leaf.endswith("_file")) and isinstance(value, str) and value):
+            continue
+        path = Path(value).expanduser()
+        path = path if path.is_absolute() else case.path.parent / path
+        try:
+            with open(path, "rb") as f:
+                digests[key] = hashlib.file_digest(f, "sha1").hexdigest()
+        except OSError:
+            digests[key] = "unreadable"
+    return digests
 
 
 def parse_sweep(items: list[str]) -> dict[str, list[str]]:
@@ -59,7 +89,7 @@ def reference(case_name: str, overrides: dict, mode: str, dem: str, out: Path,
     """The reference summary (from the cache when the same run was made before, unless
     ``fresh``: run again, and the cache holds this run's)."""
     case = load_case(case_name, overrides)
-    path = _cache_dir() / f"{_key(case.parameters, mode, dem)}.json"
+    path = _cache_dir() / f"{_key(case, mode, dem)}.json"
     if path.exists() and not fresh:
         return json.loads(path.read_text()), True
     code, _, summary = execute(case, mode, dem, out, quiet=True)
@@ -73,11 +103,14 @@ def reference(case_name: str, overrides: dict, mode: str, dem: str, out: Path,
 
 
 def pareto(times: np.ndarray, errors: np.ndarray) -> np.ndarray:
-    """Indices of the points no other point beats in both wall time and error."""
+    """Indices of the points no other point beats in both wall time and error; times: (n,) s,
+    errors: (n,). A point with a time or error not finite is never on the front (a nan compares
+    false with everything, so it would never be beaten) and beats none."""
+    finite = np.isfinite(times) & np.isfinite(errors)
     idx = []
-    for i in range(len(times)):
-        dominated = np.any((times <= times[i]) & (errors <= errors[i]) & ((times < times[i]) | (errors < errors[i])))
-        if not dominated:
+    for i in np.flatnonzero(finite):
+        beaten = finite & (times <= times[i]) & (errors <= errors[i]) & ((times < times[i]) | (errors < errors[i]))
+        if not beaten.any():
             idx.append(i)
     return np.array(idx, int)
 
@@ -107,7 +140,8 @@ def sweep_points(case_name: str, sweep: dict[str, list[str]], base: dict, ref_mo
     for k, (m, engine, sets) in enumerate(todo):
         case = load_case(case_name, sets)
         if m not in case.scene.MODES:
-            raise CaseError(f"--mode {m}: case {case.name} supports {', '.join(case.scene.MODES)}")
+            flag = "--reference-mode" if k == 0 else "--mode"
+            raise CaseError(f"{flag} {m}: case {case.name} supports {', '.join(case.scene.MODES)}")
         refuse_ineffective(case, m, engine if m != "fem" else None, reference=k == 0)
     return [(e, s) for _, e, s in todo[1:]]
 
@@ -120,6 +154,32 @@ def compared_qoi(p: dict, qoi: dict, ref_qoi: dict) -> list[str]:
                  if k.startswith("probes.") and k.endswith(".kind") and v == "zone_edge_damage"}
     return [q for q in qoi if q in ref_qoi and not q.endswith("_rel") and not q.startswith("model_size")
             and q not in zone_edge]
+
+
+def _reached(x) -> bool:
+    """A quantity the run reached: a finite number (nan or None: never, e.g. a wave's arrival
+    after t_end)."""
+    return isinstance(x, numbers.Real) and math.isfinite(x)
+
+
+def relative_errors(names: list[str], qoi: dict, ref_qoi: dict) -> tuple[dict[str, float], dict[str, str], bool]:
+    """(|q - q_ref| / |q_ref| of the names both runs reached, {name: why it is not compared},
+    whether a name was reached in one run only: the runs then disagree on whether it happened
+    at all, and no relative error says by how much)."""
+    errors, why = {}, {}
+    for q in names:
+        x, x_ref = qoi.get(q), ref_qoi.get(q)
+        if not _reached(x) or not _reached(x_ref):
+            why[q] = ("reached in neither run" if not _reached(x) and not _reached(x_ref) else
+                      "not reached in this run" if not _reached(x) else "not reached in the reference")
+        elif x_ref == 0 and x != 0:  # x/0: no relative scale (the two values are in the qoi)
+            why[q] = "0 in the reference"
+        elif x_ref == 0:
+            errors[q] = 0.0
+        else:
+            errors[q] = abs(x - x_ref) / abs(x_ref)
+    one_sided = any(_reached(qoi.get(q)) != _reached(ref_qoi.get(q)) for q in names)
+    return errors, why, one_sided
 
 
 def bench(case_name: str, sweep: dict[str, list[str]], base: dict, ref_mode: str, ref_set: dict, dem: str,
@@ -156,8 +216,7 @@ def bench(case_name: str, sweep: dict[str, list[str]], base: dict, ref_mode: str
         s = mine[0]  # (the qoi of the first round; the others' are the same when the runs repeat)
         names = qoi or compared_qoi(load_case(case_name, {**base, **dict(zip(keys, combo))}).parameters, s["qoi"],
                                     refs[0]["qoi"])
-        errors = {q: abs(s["qoi"][q] - refs[0]["qoi"][q]) / abs(refs[0]["qoi"][q]) for q in names
-                  if q in s["qoi"] and q in refs[0]["qoi"] and refs[0]["qoi"][q]}
+        errors, not_compared, one_sided = relative_errors(names, s["qoi"], refs[0]["qoi"])
         walls = [run["timing_s"]["total"] for run in mine]
         status = next((run["status"] for run in mine if run["status"] != "ok"), "ok")
         points.append({"setting": dict(zip(keys, combo)), "dem": engine, "status": status,
@@ -165,7 +224,8 @@ def bench(case_name: str, sweep: dict[str, list[str]], base: dict, ref_mode: str
                        "speedup": statistics.median(w_ref / w for w_ref, w in zip(ref_walls, walls)),
                        "repeatable": all(_same_qoi(run["qoi"], s["qoi"]) for run in mine),
                        "timing_s": s["timing_s"], "qoi": s["qoi"], "rel_error": errors,
-                       "max_rel_error": max(errors.values()) if errors else None})
+                       "not_compared": not_compared,
+                       "max_rel_error": max(errors.values()) if errors and not one_sided else None})
     ok = [p for p in points if p["status"] == "ok" and p["max_rel_error"] is not None]
     front = pareto(np.array([p["wall_s"] for p in ok]), np.array([p["max_rel_error"] for p in ok])) if ok else []
     for i in front:
@@ -234,9 +294,19 @@ def cli(args) -> int:
     print(f"reference: --mode {ref['mode']} {ref['set'] or ''} ({how} {ref['wall_s']:.2f} s)")
     for p in r["points"]:
         err = f"{p['max_rel_error']:.2e}" if p["max_rel_error"] is not None else "n/a"
+        err += _not_compared_note(p.get("not_compared", {}))
         print(f"  {p['dem'] + ' ' if ',' in args.dem else ''}{p['setting']}: {p['status']}, {p['wall_s']:.2f} s"
               f"{' (median)' if n > 1 else ''}, {p['speedup']:.2f} x the reference's speed, max rel. error {err}"
               f"{'  (Pareto)' if p.get('pareto') else ''}"
               f"{'' if p['repeatable'] else '  (its qoi differ between rounds: not repeatable)'}")
     print(f"  results: {out}/speed_error.json\n  plot:    {out}/speed_error.png")
     return 0
+
+
+def _not_compared_note(why: dict[str, str]) -> str:
+    """" (not compared: a, b reached in neither run; c not reached in the reference)", or ""."""
+    by_reason = {}
+    for q, reason in why.items():
+        by_reason.setdefault(reason, []).append(q)
+    groups = [", ".join(qs) + " " + reason for reason, qs in by_reason.items()]
+    return f" (not compared: {'; '.join(groups)})" if groups else ""

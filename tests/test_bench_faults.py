@@ -1,0 +1,138 @@
+"""femdem bench's faults: a cached reference reused though a file its case reads had changed,
+and points whose error was nan (a quantity never reached) printed as Pareto-optimal."""
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from coupling import bench
+from coupling.case import load_case
+from coupling.cli import main
+
+STUDIES = Path(__file__).resolve().parent / "studies"
+
+
+def pressed_block(folder: Path, peak_kN: float) -> Path:
+    """tests/studies/pressed_block.toml with its pressure history read from press.csv (a ramp to
+    peak_kN over 40 us, then held) and its Gmsh mesh copied beside it: both files relative to
+    the case file, as a user's own study would name them."""
+    text = (STUDIES / "pressed_block.toml").read_text()
+    curve = next(line for line in text.splitlines() if line.startswith("curve ="))
+    (folder / "pressed.toml").write_text(text.replace(curve, 'file = "press.csv"'))
+    (folder / "gmsh_block.msh").write_bytes((STUDIES / "gmsh_block.msh").read_bytes())
+    write_load(folder, peak_kN)
+    return folder / "pressed.toml"
+
+
+def write_load(folder: Path, peak_kN: float) -> None:
+    (folder / "press.csv").write_text(f"time,force\n0,0\n40,{peak_kN}\n1000,{peak_kN}\n")  # us, kN
+
+
+@pytest.fixture
+def fake_runs(monkeypatch, tmp_path):
+    """bench.execute replaced by a run that returns at once; the list of the cases it ran."""
+    ran = []
+
+    def execute(case, mode, dem, out, quiet=True):
+        ran.append(case)
+        return 0, None, {"qoi": {"peak_load": 1.0}, "timing_s": {"total": 1.0}, "status": "ok", "message": ""}
+
+    monkeypatch.setattr(bench, "execute", execute)
+    monkeypatch.setenv("FEMDEM_CACHE_DIR", str(tmp_path / "cache"))
+    return ran
+
+
+def test_a_reference_runs_again_when_a_file_its_case_reads_changes(tmp_path, fake_runs):
+    """The auditor's repro: a load CSV's forces x10 reused the reference run with the old ones
+    (a max rel. error of 9). Every file a parameter names is part of the cache's key: a changed
+    load curve or mesh is a new reference; the same bytes written again are not."""
+    case = pressed_block(tmp_path, 0.7)
+    reference = lambda k: bench.reference(str(case), {}, "fem", "yade", tmp_path / f"ref{k}")[1]
+    assert [reference(0), reference(1)] == [False, True]
+    write_load(tmp_path, 7.0)
+    assert [reference(2), reference(3)] == [False, True]
+    write_load(tmp_path, 7.0)  # rewritten, same contents: the cache holds
+    assert reference(4) is True
+    with open(tmp_path / "gmsh_block.msh", "ab") as f:
+        f.write(b"\n")
+    assert reference(5) is False
+    assert len(fake_runs) == 3
+
+
+def test_the_key_reads_the_files_the_case_names_and_survives_a_missing_one(tmp_path):
+    case = load_case(str(pressed_block(tmp_path, 0.7)))
+    assert set(bench._file_digests(case)) == {"mesh.file", "loads.press.file"}
+    before = bench._key(case, "fem", "yade")
+    (tmp_path / "press.csv").unlink()  # (removed after loading: the run then says so)
+    assert bench._file_digests(case)["loads.press.file"] == "unreadable"
+    assert bench._key(case, "fem", "yade") != before
+
+
+def test_a_case_that_names_no_file_keeps_its_cached_reference():
+    """A case without files keys its reference as before the files counted: no cached reference
+    made obsolete."""
+    import hashlib
+    case = load_case("bar_wave")
+    old = hashlib.sha1(json.dumps({"p": case.parameters, "mode": "fem", "dem": "yade"}, sort_keys=True,
+                                  default=str).encode()).hexdigest()[:20]
+    assert bench._file_digests(case) == {} and bench._key(case, "fem", "yade") == old
+
+
+def test_a_point_whose_error_is_not_finite_is_never_pareto_optimal():
+    nan, inf = float("nan"), float("inf")
+    times = np.array([1.0, 2.0, 3.0, 0.5, 0.1])
+    errors = np.array([nan, 0.1, 0.05, inf, 0.2])
+    assert list(bench.pareto(times, errors)) == [1, 2, 4]
+    assert list(bench.pareto(np.array([1.0, 2.0]), np.array([nan, nan]))) == []
+
+
+def test_relative_errors_say_why_a_quantity_is_not_compared():
+    """bar_wave at t_end = 10 us: the reference's wave reaches neither station, a coarse mesh's
+    reaches the near one (its front is smeared ahead). nan - nan was the nan printed; now each
+    quantity says why it has no relative error, and a quantity reached in one run only leaves
+    the point without a max error."""
+    nan = float("nan")
+    ref = {"wave_speed": nan, "arrival_time_near": nan, "arrival_time_far": nan}
+    coarse = {"wave_speed": nan, "arrival_time_near": 9.3e-6, "arrival_time_far": nan}
+    errors, why, one_sided = bench.relative_errors(list(ref), coarse, ref)
+    assert errors == {} and one_sided
+    assert why == {"wave_speed": "reached in neither run", "arrival_time_near": "not reached in the reference",
+                   "arrival_time_far": "reached in neither run"}
+    errors, why, one_sided = bench.relative_errors(["a", "b", "c", "d", "e"],
+                                                   {"a": 1.1, "b": 0.0, "c": 2.0, "d": None, "e": nan},
+                                                   {"a": 1.0, "b": 0.0, "c": 0.0, "d": 3.0, "e": nan})
+    assert errors == {"a": pytest.approx(0.1), "b": 0.0} and one_sided
+    assert why == {"c": "0 in the reference", "d": "not reached in this run", "e": "reached in neither run"}
+    errors, why, one_sided = bench.relative_errors(["a", "e"], {"a": 1.1, "e": nan}, {"a": 1.0, "e": nan})
+    assert list(errors) == ["a"] and not one_sided and all(math.isfinite(e) for e in errors.values())
+
+
+def test_bar_wave_before_its_wave_arrives_prints_no_nan_and_no_pareto(tmp_path, monkeypatch, capsys):
+    """The repro: bench bar_wave at t_end = 10 us printed "max rel. error nan (Pareto)" for every
+    point."""
+    monkeypatch.setenv("FEMDEM_CACHE_DIR", str(tmp_path / "cache"))
+    assert main(["bench", "bar_wave", "--sweep", "mesh.elements_along=10,20", "--mode", "fem",
+                 "--reference-mode", "fem", "--set", "clock.t_end=1e-5", "--out", str(tmp_path / "b")]) == 0
+    out = capsys.readouterr().out
+    r = json.loads((tmp_path / "b" / "speed_error.json").read_text())
+    assert "nan" not in out.replace("not reached", "")
+    for p in r["points"]:
+        error = p["max_rel_error"]
+        assert error is None or math.isfinite(error)
+        assert not p.get("pareto") or error is not None
+        assert all(math.isfinite(e) for e in p["rel_error"].values())
+    lines = [line for line in out.splitlines() if "mesh.elements_along" in line]
+    assert len(lines) == 2 and all("(Pareto)" not in line for line in lines if "n/a" in line)
+    assert all("not compared: " in line for line in lines if "n/a" in line)
+
+
+def test_a_reference_mode_the_case_lacks_is_named_as_that_option(tmp_path, capsys):
+    """bench with no flags: the default reference (--reference-mode dem) was refused as
+    "--mode dem"."""
+    assert main(["bench", "bar_wave", "--out", str(tmp_path / "b")]) == 2
+    err = capsys.readouterr().err
+    assert "--reference-mode dem: case bar_wave supports fem" in err
+    assert main(["bench", "bar_wave", "--reference-mode", "fem", "--out", str(tmp_path / "b")]) == 2
+    assert "--mode coupled: case bar_wave supports fem" in capsys.readouterr().err
