@@ -101,6 +101,13 @@ class _UntilReaderLeaves:
         return getattr(self._stream, name)
 
 
+def _kept(stop: BaseException) -> str:
+    """"; the run is kept in DIR: ..." for a run stopped while it ran (run.execute names its
+    directory on the exception), else ""."""
+    d = getattr(stop, "run_dir", None)
+    return f"; the run is kept in {d}: continue it with femdem run --resume {d}" if d and d.is_dir() else ""
+
+
 class Terminated(BaseException):
     """SIGTERM received: unwinds the run as Ctrl-C does (its engines and workers closed, its
     shared memory released), not caught as an error on the way."""
@@ -125,11 +132,11 @@ def main(argv: list[str] | None = None) -> int:
     unraisable, sys.unraisablehook = sys.unraisablehook, _log_unraisable
     try:
         return _main(argv)
-    except KeyboardInterrupt:
-        print("femdem: interrupted", file=sys.stderr)
+    except KeyboardInterrupt as exc:
+        print(f"femdem: interrupted{_kept(exc)}", file=sys.stderr)
         return 130
-    except Terminated:
-        print("femdem: terminated (SIGTERM)", file=sys.stderr)
+    except Terminated as exc:
+        print(f"femdem: terminated (SIGTERM){_kept(exc)}", file=sys.stderr)
         return 143
     except Exception as exc:  # a defect: one line here, the traceback in a log
         from .run import OutOfSpace

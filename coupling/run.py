@@ -118,6 +118,9 @@ def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool,
         import traceback
         (writer.dir / "error.log").write_text(traceback.format_exc())
         status, message = "error", f"{type(exc).__name__}: {exc} (traceback in {writer.final / 'error.log'})"
+    except BaseException as exc:  # Ctrl-C, SIGTERM: the run stays in its directory (the command line names it)
+        exc.run_dir = writer.dir
+        raise
     finally:
         if sim is not None:
             sim.close()
