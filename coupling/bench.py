@@ -80,6 +80,9 @@ def parse_sweep(items: list[str]) -> dict[str, list[str]]:
             raise CaseError(f"--sweep {item!r}: expected key=v1,v2,... with a dotted key and no empty value")
         if key.strip() in out:
             raise CaseError(f"--sweep {key.strip()}: given twice; allowed: one --sweep per key")
+        twice = sorted({v for v in values if values.count(v) > 1})
+        if twice:
+            raise CaseError(f"--sweep {item}: {', '.join(twice)} given twice; allowed: each value once")
         out[key.strip()] = values
     return out
 

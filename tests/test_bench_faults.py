@@ -136,3 +136,12 @@ def test_a_reference_mode_the_case_lacks_is_named_as_that_option(tmp_path, capsy
     assert "--reference-mode dem: case bar_wave supports fem" in err
     assert main(["bench", "bar_wave", "--reference-mode", "fem", "--out", str(tmp_path / "b")]) == 2
     assert "--mode coupled: case bar_wave supports fem" in capsys.readouterr().err
+
+
+def test_a_value_swept_twice_is_refused_by_its_option():
+    """--sweep k=10,10 was blamed on --out (the second point's directory existed)."""
+    from coupling.bench import parse_sweep
+    from coupling.params import CaseError
+    with pytest.raises(CaseError, match=r"--sweep mesh.elements_along=10,20,10: 10 given twice"):
+        parse_sweep(["mesh.elements_along=10,20,10"])
+    assert parse_sweep(["mesh.elements_along=10,20"]) == {"mesh.elements_along": ["10", "20"]}
