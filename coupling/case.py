@@ -129,6 +129,7 @@ def _load_study(path: Path, data: dict, overrides: dict[str, Any] | None, where:
                             f"({path.name}), not with {where}")
         params.update({k: schema[k].coerce(k, v) for k, v in overrides.items()})
     study.resolve_files(params, path.absolute().parent)
+    study.refuse_inconsistent(params, frozenset(overrides or ()))
     return Case(name, study, params, path.absolute(), study.DESCRIPTION, frozenset(overrides or ()))
 
 

@@ -237,7 +237,7 @@ def test_case_files_with_a_byte_order_mark_are_read(femdem, tmp_path, encoding):
     (["run", "bar_wave", "--set", "output.field_frames=0x10"], ["output.field_frames", "0x10"]),
     (["run", "bar_wave", "--set", "clock.t_end=1e300"], ["clock.max_steps", "clock steps"]),
     (["run", "bar_wave", "--set", "clock.max_steps=10"], ["clock.max_steps = 10", "clock steps"]),
-    (["run", "bar_wave", "--out", "{tmp}/afile"], ["--out", "afile", "not an empty directory"]),
+    (["run", "bar_wave", "--out", "{tmp}/afile"], ["--out", "afile", "exists and is a file"]),
     (["run", "bar_wave", "--out", "{tmp}/afile/sub"], ["--out", "a file"]),
     (["run", "bar_wave", "--dem", "yade"], ["--dem yade", "--mode fem"]),
     (["run", "bar_wave", "--mode", ""], ["--mode", "allowed"]),
@@ -413,3 +413,120 @@ def test_a_bench_s_reference_takes_the_compared_runs_zone_settings():
         points = sweep_points("beam_impact_coarse", {"zone.grow_every": ["0", "1"]}, grow, ref, {}, "liggghts", "coupled")
         assert [s["zone.grow_every"] for _, s in points] == ["0", "1"]
 
+
+
+# -- input an audit found accepted (a run that died, or a setting silently ignored): refused at
+# load, exit 2, one line naming key, value and what is allowed, nothing written ------------------
+
+BEAM = ROOT / "cases" / "seed" / "beam_impact_coarse.toml"
+CFRP = ROOT / "cases" / "seed" / "cfrp_beam_impact_coarse.toml"
+SHORT = ["--mode", "fem", "--set", "clock.t_end=1e-6"]  # (the old code ran these: a microsecond)
+
+
+def _refused(femdem, tmp_path, case, args, words):
+    code, summary, err = femdem("run", str(case), *SHORT, *args)
+    assert code == 2 and summary is None, err
+    assert len(err.strip().splitlines()) == 1, err
+    for w in words:
+        assert w in err, (w, err)
+    assert not list(tmp_path.glob("run*")), "nothing may be left behind on bad input"
+
+
+def _beam_with(tmp_path, tables: str) -> Path:
+    path = tmp_path / "beam.toml"
+    path.write_text(BEAM.read_text() + "\n" + tables)
+    return path
+
+
+def _cfrp_with_load_file(tmp_path, csv: bytes, keep_curve: bool = False) -> Path:
+    """The bonded beam's drop load read from load.csv (ms, kN) beside its copy."""
+    text = CFRP.read_text()
+    start = text.index("curve = [[0.0")
+    end = start if keep_curve else text.index("\n\n", start)
+    (tmp_path / "load.csv").write_bytes(csv)
+    path = tmp_path / "cfrp.toml"
+    path.write_text(text[:start] + 'file = "load.csv"\n' + text[end:])
+    return path
+
+
+STUDY_TABLES = {  # name: (tables appended to the coarse beam, words of the one line)
+    "two impactors": ("[impactors.second]\nradius = 5e-3\nmass_per_width = 0.617\nvelocity = 10.0\n",
+                      ["[impactors.second]", "[impactors.cylinder]", "one per case"]),
+    "two supports": ("[supports.more]\ncondition = 'clamped'\n", ["[supports.more]", "one per case"]),
+    "a qoi of two probes": ("[probes.peak_contact_force]\nkind = 'literature_value'\nvalue = 1.0\n",
+                            ["probes.contact_force", "probes.peak_contact_force", "'peak_contact_force'"]),
+    "a qoi the run records": ("[probes.model_size]\nkind = 'literature_value'\nvalue = 1.0\n",
+                              ["probes.model_size", "'model_size'", "the run's own"]),
+    "a range upside down": ("[checks.range]\nclosed_form = 'test_between'\nqoi = 'peak_contact_force'\nlow = 5.0\n"
+                            "high = 1.0\n", ["checks.range.low = 5", "checks.range.high = 1", "low <= high"]),
+    "two durations": ("[clock]\nt_end = 1e-6\n", ["clock.t_end = 1e-06", "case.t_end = 0.0006", "one of them"]),
+}
+
+
+@pytest.mark.parametrize("name", STUDY_TABLES)
+def test_tables_that_contradict_the_study_are_refused(femdem, tmp_path, name):
+    tables, words = STUDY_TABLES[name]
+    path = _beam_with(tmp_path, tables)
+    _refused(femdem, tmp_path, path, [], words)
+    assert femdem("params", str(path))[0] == 2  # (refused by params too: at load)
+
+
+@pytest.mark.parametrize("setting, words", [
+    ("probes.centre_displacement.x=-1.0", ["probes.centre_displacement.x = -1", "outside", "0 to 0.025"]),
+    ("probes.centre_displacement.x=1.0", ["probes.centre_displacement.x = 1", "0 to 0.025"]),
+    ("probes.centre_displacement.y=0.5", ["probes.centre_displacement.y = 0.5", "0 to 0.0024"]),
+    ("probes.centre_displacement.z=5.0", ["probes.centre_displacement.z = 5", "2D slice", "allowed: 0"]),
+    ("fem.hourglass=viscous", ["fem.hourglass = 'viscous'", "no effect", "fem.integration = 'selective'"]),
+    ("fem.hourglass=none", ["fem.hourglass = 'none'", "fem.integration = 'reduced'"]),
+    ("fem.hourglass_kappa=0.2", ["fem.hourglass_kappa = 0.2", "fem.integration"]),
+])
+def test_settings_off_the_body_or_without_effect_are_refused(femdem, tmp_path, setting, words):
+    """A probe point outside the body was moved to the nearest node (the centre's, the clamp's,
+    the top face's value reported); hourglass control without one-point elements changed no bit."""
+    _refused(femdem, tmp_path, BEAM, ["--set", setting], words)
+
+
+def test_probe_points_on_the_body_and_hourglass_with_one_point_elements_are_taken():
+    from coupling.case import load_case
+    corner = {"probes.centre_displacement.x": "0.025", "probes.centre_displacement.y": "0.0024"}
+    assert load_case("beam_impact_coarse", corner).parameters["probes.centre_displacement.x"] == 0.025
+    reduced = {"fem.integration": "reduced", "fem.hourglass": "viscous"}
+    assert load_case("rod_impact_coarse", reduced).parameters["fem.hourglass"] == "viscous"
+    with pytest.raises(CaseError, match=r"outside the disc \(radius 0.12 m\)"):  # a quarter disc: its corner is not
+        load_case("rod_impact_coarse", {"probes.plate_deflection.x": "0.1", "probes.plate_deflection.y": "0.1"})
+
+
+@pytest.mark.parametrize("csv, words", [
+    (b"t,F\n0,0\n40,nan\n60,1\n", ["loads.drop.file", "line 3 '40,nan'", "finite"]),
+    (b"0,0,5\n1,2,5\n", ["loads.drop.file", "3 columns", "two columns"]),
+    ("# d\xe9j\xe0 vu\n0,0\n1,1\n".encode("latin-1"), ["loads.drop.file", "not UTF-8", "0xe9"]),
+    (b"t,F\n0,0\nzero,one\n1,1\n", ["loads.drop.file", "'zero,one'", "not numbers"]),
+])
+def test_a_load_file_is_checked_as_an_inline_curve(femdem, tmp_path, csv, words):
+    """NaN passed and the run stopped later blaming its time step; a third column was dropped
+    silently; a Latin-1 file gave a bare codec message."""
+    _refused(femdem, tmp_path, _cfrp_with_load_file(tmp_path, csv), [], words)
+
+
+def test_a_load_s_curve_and_file_are_not_both_given(femdem, tmp_path):
+    """The file is read instead of the curve: a curve beside it changed nothing."""
+    csv = b"time_ms,load_kN\n0,0\n0.2,31.1\n0.4,20\n"
+    path = _cfrp_with_load_file(tmp_path, csv)
+    _refused(femdem, tmp_path, path, ["--set", "loads.drop.curve=[[0,0],[1e-3,1e30]]"],
+             ["loads.drop.curve", "1e+30", "no effect", "loads.drop.file"])
+    _refused(femdem, tmp_path, _cfrp_with_load_file(tmp_path, csv, keep_curve=True), [],
+             ["loads.drop.curve and loads.drop.file = 'load.csv'", "both given", "one of them"])
+
+
+@pytest.mark.parametrize("case", ["beam_impact_coarse", "rod_impact_coarse"])
+def test_the_hourglass_settings_reach_the_far_field(case):
+    """fem.hourglass and fem.hourglass_kappa under reduced integration are the region's (only the
+    disc read them: a beam's far field ran the stiffness form at 0.1 whatever the case said)."""
+    from coupling.case import load_case
+    from coupling.params import parse_set
+    c = load_case(case, parse_set(["fem.integration=reduced", "fem.hourglass=viscous", "fem.hourglass_kappa=0.05"]))
+    sim, built = c.scene.assemble(c.parameters, "fem", "liggghts")
+    try:
+        assert (built.dyn.region.hg.form, built.dyn.region.hourglass_kappa) == ("viscous", 0.05)
+    finally:
+        sim.close()

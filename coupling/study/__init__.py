@@ -21,7 +21,7 @@ from .disc import disc
 from .panel import panel as assemble_panel
 from .growth import Growth
 from .placement import estimate, place
-from .schema import BONDED, LAMINATED, MODES, document, parameters
+from .schema import BONDED, KIND_KEY, LAMINATED, MODES, document, parameters
 
 __all__ = ["Study", "document_schema", "renamed"]
 
@@ -55,6 +55,9 @@ class Study:
             t_end = np.inf
         elif isinstance(t_end, bool) or not isinstance(t_end, (int, float)) or not t_end > 0:
             raise CaseError(f"case.t_end = {t_end!r}: required in {where}; allowed a number > 0 [s]")
+        elif isinstance(data.get("clock"), dict) and "t_end" in data["clock"]:  # one duration per file
+            raise CaseError(f"clock.t_end = {data['clock']['t_end']!r}: the file's duration is case.t_end = {t_end!r} "
+                            f"in {where}; allowed: one of them (clock.t_end with --set cuts a run short)")
         self.t_end = float(t_end)
         ref = meta.get("reference_elements", 0)
         if isinstance(ref, bool) or not isinstance(ref, int) or ref < 0:
@@ -66,6 +69,9 @@ class Study:
         self._no_fracture, self._placed = {}, {}
         self.growth = None  # the last coupled run's growing zone (study/growth.py)
         self._shape_tables(shape, data)
+        _one_each(self.layout.names)
+        _curve_or_file(data.get("loads", {}), where)
+        probes.refuse_clashing_qoi(self.layout.names["probes"], self._recorded())
         want = {"beam": ("x", "quad4"), "beam_3d": ("xy", "hex8"), "plate": ("xy", "hex8"), "disc": ("xy", "hex8"),
                 "bonded_beam": ("x", "quad4"), "bonded_beam_3d": ("xy", "hex8"), "panel": ("none", "quad4"),
                 "block": ("xy", "hex8")}[shape]
@@ -221,8 +227,35 @@ class Study:
                     raise CaseError(f"materials.{name_}.kind = {kind!r}: geometry.shape = {shape!r} takes ply materials")
 
     def resolve_files(self, p: dict, folder) -> None:
-        """Files a study reads (load curves, a mesh), relative to its case file's folder."""
-        resolve_files(p, [f"loads.{n}.file" for n in self.layout.names["loads"]] + ["mesh.file"], folder)
+        """Files a study reads (load curves, a mesh), relative to its case file's folder; a load
+        file's rows checked as an inline curve's."""
+        loads = [f"loads.{n}.file" for n in self.layout.names["loads"]]
+        resolve_files(p, loads + ["mesh.file"], folder)
+        for key in loads:
+            if p.get(key):
+                load_file_rows(key, p[key])
+
+    def refuse_inconsistent(self, p: dict, given: frozenset = frozenset()) -> None:
+        """CaseError for resolved values that contradict each other or change nothing; given: the
+        keys of --set (a value off the case file's is the user's setting)."""
+        changed = {k for k in given if k in self.PARAMETERS and p[k] != self.PARAMETERS[k].default}
+        for name in self.layout.names["loads"]:
+            curve, file = f"loads.{name}.curve", f"loads.{name}.file"
+            if curve in changed and p.get(file):  # (the file is read instead of the curve)
+                raise CaseError(f"{curve} = {[list(r) for r in p[curve]]}: has no effect with {file} = {p[file]!r}; "
+                                f"allowed: leave it out, or the curve in the case file instead of its file")
+        for name in (n for n, kind in self.layout.names["checks"].items() if kind == "test_between"):
+            low, high = p[f"checks.{name}.low"], p[f"checks.{name}.high"]
+            if low > high:
+                raise CaseError(f"checks.{name}.low = {low:g}: above checks.{name}.high = {high:g} (no value could "
+                                "pass); allowed: low <= high")
+        _hourglass(p, changed)
+        probes.refuse_points_outside(self.layout.names["probes"], p)
+
+    def _recorded(self) -> set:
+        """The qoi a run records besides its probes' (a probe reporting one of them would vanish)."""
+        forms = [closed_forms.CLOSED_FORMS[k].reference_qoi for k in self.layout.names["checks"].values()]
+        return {"model_size", "model_size_vs_reference"} | {q + end for q in forms if q for end in ("", "_upper")}
 
     def no_fracture_history(self, p: dict) -> dict:
         """The history of this study's all-FEM twin (no fracture), run once per parameter set:
@@ -482,6 +515,72 @@ def _renamed_bonded(key: str, study: Study) -> str | None:
         kinds = [n for n, k in names["probes"].items() if k == "flexural_cracks"]
         return f"probes.{kinds[0]}.visible_opening" if kinds else None
     return None
+
+
+def _one_each(names: dict) -> None:
+    """One impactor and one support per case: several are not in the schema (docs/cases.md;
+    a second impactor failed mid-run)."""
+    for table in ("impactors", "supports"):
+        first, *more = names[table] or [None]
+        if more:
+            raise CaseError(f"[{table}.{more[0]}] ({KIND_KEY[table][0]} = {names[table][more[0]]!r}): a second "
+                            f"[{table}.*] beside [{table}.{first}]; allowed: one per case (several are not in the "
+                            "schema)")
+
+
+def _curve_or_file(loads: dict, where: str) -> None:
+    """A load's history is its curve or its file, not both (the file would win silently)."""
+    for name, entry in loads.items():
+        if isinstance(entry, dict) and "curve" in entry and "file" in entry:
+            raise CaseError(f"loads.{name}.curve and loads.{name}.file = {entry['file']!r}: both given in {where} "
+                            "(the file is read instead of the curve); allowed: one of them")
+
+
+def _hourglass(p: dict, changed: set) -> None:
+    """fem.hourglass and its kappa act on one-point elements only (fem.integration = 'reduced');
+    a case file may hold them for a --set of the integration, so only --set's are refused."""
+    for key in ("fem.hourglass", "fem.hourglass_kappa"):
+        if key in changed and p["fem.integration"] != "reduced":
+            raise CaseError(f"{key} = {p[key]!r}: has no effect with fem.integration = {p['fem.integration']!r} "
+                            "(hourglass control acts on one-point elements); allowed: leave it out, or "
+                            "fem.integration = 'reduced'")
+
+
+def load_file_rows(key: str, path: str) -> list[tuple[float, float]]:
+    """The rows time,value of a load's CSV file (header and # lines skipped, as
+    fem_region.loads.tabulated reads it), refused as an inline curve would be: two finite
+    columns, at least two rows, times increasing; UTF-8 text."""
+    try:
+        raw = Path(path).read_bytes()
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise CaseError(f"{key} = {path!r}: not UTF-8 text (byte {raw[exc.start]:#04x} at offset {exc.start}); "
+                        "allowed: a UTF-8 CSV file of time,value rows") from None
+    except OSError as exc:
+        raise CaseError(f"{key} = {path!r}: cannot be read ({exc.strerror}); allowed: a readable CSV file") from None
+    rows = []
+    for number, line in enumerate(text.splitlines(), 1):
+        line = line.strip()
+        if not line or line.startswith("#"):
+            continue
+        try:
+            row = [float(x) for x in line.split(",")]
+        except ValueError:
+            if rows:  # a header comes first; a row that is not numbers after the data would be dropped
+                raise CaseError(f"{key} = {path!r}: line {number} {line!r} is not numbers; allowed: a header, then "
+                                "rows time,value") from None
+            continue
+        if len(row) != 2 or not all(map(np.isfinite, row)):
+            why = f"{len(row)} columns" if len(row) != 2 else "not finite"
+            raise CaseError(f"{key} = {path!r}: line {number} {line!r}: {why}; allowed: two columns time,value of "
+                            "finite numbers")
+        rows.append((row[0], row[1]))
+    if len(rows) < 2:
+        raise CaseError(f"{key} = {path!r}: {len(rows)} row(s) of numbers; allowed: at least two rows time,value")
+    for a, b in zip(rows, rows[1:]):
+        if b[0] <= a[0]:
+            raise CaseError(f"{key} = {path!r}: time {b[0]:g} after {a[0]:g}; allowed: times increasing")
+    return rows
 
 
 def resolve_files(p: dict, keys, folder: Path) -> None:

@@ -405,6 +405,100 @@ PROBES: dict[str, ProbeKind] = {
 }
 
 
+# the qoi each kind reports ({name}: its probe's name; a trailing *: any ending, one per interface
+# or time), beside its ProbeKind.reports; a ply_cracks probe reads every series its name begins
+QOI_NAMES = {
+    "point_displacement": ("peak_{name}", "time_of_peak_{name}", "peak_{name}_no_fracture",
+                           "{name}_change_by_fracture"),
+    "contact_force": ("peak_{name}", "{name}_impulse"),
+    "delamination": ("{name}_area_*", "{name}_length_*", "damaged_interface_length_*"),
+    "ply_cracks": ("{name}*",),
+    "zone_edge_damage": ("{name}",),
+    "far_field_failure": tuple(f"{w}peak_{{name}}_{c}" for w in ("", "x_of_") for c in ("hoffman", "interlaminar")),
+    "impactor_motion": ("final_{name}_velocity",),
+    "interface_damage": ("debonded_area", "damaged_area", "peak_layer_separation"),
+    "applied_load": ("peak_{name}",),
+    "fibre_stress": ("peak_{name}",),
+    "flexural_cracks": ("crack_onset_time", "crack_initiation_time", "crack_top_time", "cracked_bonds",
+                        "traction_free_bonds"),
+    "debonding": ("debond_initiation_time", "debonded_length", "debonded_fraction_*", "sheet_broken_bonds"),
+    "literature_value": ("{name}",),
+}
+
+
+def qoi_names(kind: str, name: str) -> tuple[str, ...]:
+    """The qoi a probe NAME of this kind reports (a trailing *: any ending)."""
+    return tuple(q.format(name=name) for q in QOI_NAMES.get(kind, ())) + PROBES[kind].reports
+
+
+def _same_qoi(a: str, b: str) -> bool:
+    """Whether two qoi names (a trailing * any ending) can be the same name."""
+    pa, pb = a.rstrip("*"), b.rstrip("*")
+    if a.endswith("*") and b.endswith("*"):
+        return pa.startswith(pb) or pb.startswith(pa)
+    return a == b or a.endswith("*") and b.startswith(pa) or b.endswith("*") and a.startswith(pb)
+
+
+def refuse_clashing_qoi(probes: dict, recorded: set) -> None:
+    """CaseError for a probe reporting a qoi another probe (or the run itself: recorded) reports:
+    one of them would vanish from the run's qoi. probes: {name: kind}."""
+    owned = [(q, name) for name, kind in probes.items() for q in qoi_names(kind, name)]
+    owned += [(q, None) for q in sorted(recorded)]
+    for i, (a, first) in enumerate(owned):
+        for b, second in owned[i + 1:]:
+            if first != second and _same_qoi(a, b):
+                whose = f"probes.{second}'s (kind {probes[second]!r})" if second else "the run's own"
+                raise CaseError(f"probes.{first} (kind {probes[first]!r}): its qoi {a.rstrip('*')!r} is also "
+                                f"{whose}; allowed: another probe name (each qoi is reported once)")
+
+
+def body_extent(p: dict) -> list[tuple[float, float]]:
+    """(low, high) m of the modelled body along each axis (x along the span, then across the
+    width in 3D, then through the thickness): the half or quarter about x = 0 (y = 0), a panel
+    whole, a bonded beam's sheet below y (3D: z) = 0, a panel's bow beside its thickness."""
+    from fem_region.materials import parse_layup
+    shape = p["geometry.shape"]
+    if p.get("geometry.laminate"):
+        lam = f"laminates.{p['geometry.laminate']}"
+        low, high = 0.0, len(parse_layup(p[f"{lam}.layup"])) * p[f"{lam}.ply_thickness"]
+    else:
+        low, high = 0.0, p["geometry.depth"]
+    if shape.startswith("bonded_beam"):
+        low = -next(v for k, v in p.items() if k.startswith("sheets.") and k.endswith(".thickness"))
+    if shape == "panel":  # its bow and the sublaminate's bump move it off [0, H]
+        bump = p["geometry.imperfection"] + max(v for k, v in p.items() if k.startswith("delaminations.")
+                                                 and k.endswith(".imperfection"))
+        low, high = low - bump * high, high * (1 + bump)
+    along = p["geometry.span"] if shape == "panel" else 0.5 * (p.get("geometry.length") or p["geometry.span"])
+    if shape in ("beam", "bonded_beam", "panel"):
+        return [(0.0, along), (low, high)]
+    across = 0.5 * (p["geometry.span"] if shape == "disc" else p["geometry.width"])
+    return [(0.0, along), (0.0, across), (low, high)]
+
+
+def refuse_points_outside(probes: dict, p: dict) -> None:
+    """CaseError for a probe point (x, y[, z]) outside the modelled body, which the nearest node
+    or particle would silently stand for, or a z on a 2D slice. probes: {name: kind}."""
+    extent = body_extent(p) if any(f"probes.{n}.x" in p for n in probes) else []
+    tol = 1e-9 * max((hi - lo for lo, hi in extent), default=0.0)
+    shape = p["geometry.shape"]
+    for name in probes:
+        if f"probes.{name}.x" not in p:
+            continue
+        at = [p[f"probes.{name}.{axis}"] for axis in "xyz"]
+        if len(extent) == 2 and at[2] != 0:
+            raise CaseError(f"probes.{name}.z = {at[2]:g}: has no effect on a 2D slice (geometry.shape = {shape!r}); "
+                            "allowed: 0, or leave it out")
+        for i, (axis, v, (lo, hi)) in enumerate(zip("xyz", at, extent)):
+            half = shape != "panel" and i < len(extent) - 1  # (a half or quarter model from its symmetry planes)
+            if not lo - tol <= v <= hi + tol:
+                raise CaseError(f"probes.{name}.{axis} = {v:g}: outside the modelled body (geometry.shape = {shape!r}"
+                                f"{', from its symmetry plane' if half else ''}); allowed {lo:g} to {hi:g} [m]")
+        if shape == "disc" and np.hypot(at[0], at[1]) > extent[0][1] + tol:
+            raise CaseError(f"probes.{name}.x, y = {at[0]:g}, {at[1]:g}: outside the disc (radius {extent[0][1]:g} m); "
+                            "allowed: x^2 + y^2 <= radius^2")
+
+
 def series(study, built, p: dict) -> dict:
     out = {}
     for name, kind in study.layout.names["probes"].items():
