@@ -62,7 +62,14 @@ class HourglassControl:
 
     def stiffness(self, dim: int) -> np.ndarray:
         """(nel, n_loc*dim, n_loc*dim) N/m element hourglass stiffness."""
-        g = np.einsum("e,ema,emb->eab", self.k, self.gamma, self.gamma)
+        return self._matrices(self.k, dim)
+
+    def damping(self, dim: int) -> np.ndarray:
+        """(nel, n_loc*dim, n_loc*dim) kg/s element damping of the viscous form."""
+        return self._matrices(self.c, dim)
+
+    def _matrices(self, coef: np.ndarray, dim: int) -> np.ndarray:
+        g = np.einsum("e,ema,emb->eab", coef, self.gamma, self.gamma)
         return np.einsum("eab,ij->eaibj", g, np.eye(dim)).reshape(len(g), g.shape[1] * dim, -1)
 
     def energy(self, ue: np.ndarray) -> float:

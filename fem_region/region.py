@@ -307,6 +307,14 @@ class FemRegion:
     def viscous_hourglass(self) -> bool:
         return self.hg is not None and self.hg.form == "viscous"
 
+    def hourglass_damping(self) -> sp.csr_matrix:
+        """(ndof, ndof) kg/s: the viscous hourglass form's damping matrix (zero without it)."""
+        if not self.viscous_hourglass:
+            return sp.csr_matrix((self.ndof, self.ndof))
+        r = np.repeat(self._edofs, self._edofs.shape[1], axis=1).ravel()
+        c = np.tile(self._edofs, (1, self._edofs.shape[1])).ravel()
+        return sp.csr_matrix((self.hg.damping(self.dim).ravel(), (r, c)), shape=(self.ndof, self.ndof))
+
     def add_hourglass_viscous_force(self, v: np.ndarray, out: np.ndarray) -> None:
         """out (n_nodes, dim) N += the viscous hourglass form's force at velocity v, if that form."""
         if self.viscous_hourglass:

@@ -253,3 +253,47 @@ def test_the_support_pass_is_the_reaction_and_trapezoidal_work_of_its_dofs(n, di
     a_expected = a0.reshape(-1).copy()
     a_expected[dofs] = a_pres
     assert np.array_equal(a.reshape(-1), a_expected)
+
+
+def _energy_ratio(kappa: float, aspect: float, seed: int, dt: float | None = None) -> float:
+    """(kinetic + strain energy) after 3,000 steps over at the start of a free strip of one-point
+    Q4 of a 0 ply (E11 / E22 = 17), elements ``aspect`` x longer than high, with the viscous
+    hourglass form of coefficient kappa, set moving at random; at dt (default: 0.9 x the stable
+    step, the form's damping in it)."""
+    h = 0.15e-3
+    m = mesh.rectangle(np.linspace(0, 12 * aspect * h, 13), np.linspace(0, 4 * h, 5))
+    D = materials.reduce(materials.orthotropic(156e9, 9.09e9, 9.09e9, 0.228, 0.228, 0.4, 4.5e9, 4.5e9, 3.25e9),
+                         2, "plane_stress")
+    r = FemRegion(m, ELEMENTS["quad4"], D, 1540.0, 1e-3, "reduced", hourglass="viscous", hourglass_kappa=kappa)
+    dyn = ExplicitDynamics(r)
+    dyn.state.v[:] = np.random.default_rng(seed).normal(size=dyn.state.v.shape)
+    if dt is None:
+        dt = 0.9 * dyn.critical_dt()
+    dyn.start()
+    e0 = dyn.energies()
+    for _ in range(3000):
+        dyn.step(dt)
+    e = dyn.energies()
+    return (e["kinetic"] + e["internal"]) / (e0["kinetic"] + e0["internal"])
+
+
+@settings(max_examples=8, deadline=None)
+@given(kappa=st.floats(0.01, 1.0), aspect=st.floats(0.5, 8.0), seed=st.integers(0, 2**31))
+def test_the_viscous_hourglass_form_is_within_the_stable_step(kappa, aspect, seed):
+    """Over fem.hourglass_kappa's range and elements up to 8 x longer than high: at the stable
+    step, which counts the viscous form's damping, the energy only falls."""
+    assert _energy_ratio(kappa, aspect, seed) <= 1.0 + 1e-9
+
+
+def test_the_viscous_hourglass_form_needs_its_damping_in_the_step():
+    """The control: the seed beam's far-field elements (6.7 x longer than a ply is thick, kappa
+    0.1) at the step of their stiffness alone, as the beams took it before, gain energy without
+    bound (its hourglass modes have no stiffness; the damping alone limits the step)."""
+    from fem_region.stable_step import assembled_critical_dt
+    h = 0.15e-3
+    m = mesh.rectangle(np.linspace(0, 12 * 6.7 * h, 13), np.linspace(0, 4 * h, 5))
+    D = materials.reduce(materials.orthotropic(156e9, 9.09e9, 9.09e9, 0.228, 0.228, 0.4, 4.5e9, 4.5e9, 3.25e9),
+                         2, "plane_stress")
+    r = FemRegion(m, ELEMENTS["quad4"], D, 1540.0, 1e-3, "reduced", hourglass="viscous", hourglass_kappa=0.1)
+    undamped = 0.9 * assembled_critical_dt(r.K, r.mass, 2)
+    assert not _energy_ratio(0.1, 6.7, 0, undamped) <= 1.0  # (nan: it overflowed)

@@ -46,6 +46,10 @@ def _stage_peaks(mode: str, dem: str, size: dict, name: str = "beam_impact_coars
     """({stage: median transient bytes over the steps after the first ten}, counts)."""
     case = load_case(name, {**size, **RUN, **settings})
     sim = case.scene.build(case.parameters, mode, dem)
+    # the guards judge the model, not its stages' allocations: with the viscous hourglass form
+    # (no stiffness on the hourglass modes) this beam of one-point elements hourglasses, which
+    # its guard stops at the first sample
+    sim.guards = []
     peaks: dict[str, list[int]] = {}
     for stage in sim.stages:
         _measured(stage, peaks)
@@ -74,7 +78,7 @@ OPTIONS = {
     "TL, hourglass stiffness": ("fem", {"fem.formulation": "total_lagrangian", "fem.integration": "reduced",
                                         "fem.hourglass": "stiffness", "clock.t_end": 6e-6}),
     "TL, hourglass viscous": ("fem", {"fem.formulation": "total_lagrangian", "fem.integration": "reduced",
-                                      "fem.hourglass": "viscous", "clock.t_end": 6e-6}),  # (before its guard)
+                                      "fem.hourglass": "viscous", "clock.t_end": 6e-6}),
 }
 
 

@@ -27,10 +27,13 @@ FEM_OPTIONS: dict[str, Param] = {
 
 
 def make_region(m, p: dict, D: np.ndarray, rho, thickness: float) -> FemRegion:
-    """FemRegion on mesh m with the case's fem.* options; D (nel, ns, ns) or (ns, ns) Pa."""
+    """FemRegion on mesh m with the case's fem.* options; D (nel, ns, ns) or (ns, ns) Pa. The
+    hourglass control's form and coefficient where the case declares them (they were read by
+    the disc only: a beam's reduced integration ran the stiffness form whatever fem.hourglass said)."""
+    hg = {k: p[f"fem.{k}"] for k in ("hourglass", "hourglass_kappa") if f"fem.{k}" in p}
     try:
         return FemRegion(m, ELEMENTS[mesh.element_name(m)], D, rho, thickness,
-                         p["fem.integration"], p["fem.formulation"])
+                         p["fem.integration"], p["fem.formulation"], **hg)
     except ValueError as exc:
         raise CaseError(f"fem.integration = {p['fem.integration']!r}: {exc}") from None
 
