@@ -96,11 +96,7 @@ def load_case(name_or_path: str, overrides: dict[str, Any] | None = None, where:
     for key in ("name", "description"):
         if not isinstance(meta.get(key, ""), str):
             raise CaseError(f"case.{key} = {meta[key]!r}: expected a string")
-    name = meta.get("name", path.stem)
-    if not CASE_NAME.fullmatch(name):
-        # the name becomes the run directory's: never a path, never outside runs/
-        raise CaseError(f"case.name = {name!r}: allowed letters, digits and _ . - (not first), "
-                        "at most 100 characters")
+    name = _case_name(meta, path)
     scene = SCENES[scene_name]
     schema = {**COMMON, **scene.PARAMETERS}
     params = resolve(schema, flatten(data), f"case file {path.name}", typed=True)
@@ -110,13 +106,23 @@ def load_case(name_or_path: str, overrides: dict[str, Any] | None = None, where:
     return Case(name, scene, params, path.absolute(), meta.get("description", ""), frozenset(overrides or ()))
 
 
+def _case_name(meta: dict, path: Path) -> str:
+    """case.name, or the case file's name without .toml; it becomes the run directory's name:
+    never a path, never outside runs/."""
+    if "name" in meta:
+        name, what = meta["name"], f"case.name = {meta['name']!r}"
+    else:
+        name, what = path.stem, f"the case file's name {path.name!r} (its case name, case.name not given)"
+    if not isinstance(name, str) or not CASE_NAME.fullmatch(name):
+        raise CaseError(f"{what}: allowed letters, digits and _ . - (not first), at most 100 characters "
+                        "(or a case.name of them in the file)")
+    return name
+
+
 def _load_study(path: Path, data: dict, overrides: dict[str, Any] | None, where: str = "--set") -> Case:
     """A study file: its schema from its own tables, then the same resolution as a scene's."""
     meta = data.get("case", {})
-    name = meta.get("name", path.stem) if isinstance(meta, dict) else path.stem
-    if not isinstance(name, str) or not CASE_NAME.fullmatch(name):
-        raise CaseError(f"case.name = {name!r}: allowed letters, digits and _ . - (not first), "
-                        "at most 100 characters")
+    name = _case_name(meta if isinstance(meta, dict) else {}, path)
     study = Study(name, data, path.name)
     schema = {**COMMON, **study.PARAMETERS}
     given = flatten({k: v for k, v in data.items() if k not in ("case", "ranges")})

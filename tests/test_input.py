@@ -530,3 +530,15 @@ def test_the_hourglass_settings_reach_the_far_field(case):
         assert (built.dyn.region.hg.form, built.dyn.region.hourglass_kappa) == ("viscous", 0.05)
     finally:
         sim.close()
+
+
+def test_a_case_file_named_unlike_a_case_is_refused_by_its_file_name(tmp_path):
+    """`bar wave.toml` without a case.name: the message names the file (it named case.name, a key
+    the user never wrote)."""
+    from coupling.case import load_case
+    from coupling.params import CaseError
+    for source in ("verification/bar_wave.toml", "seed/beam_impact_coarse.toml"):  # a scene's and a study's
+        bad = tmp_path / "bar wave.toml"
+        bad.write_text((ROOT / "cases" / source).read_text())
+        with pytest.raises(CaseError, match=r"^the case file's name 'bar wave.toml' \(its case name, case.name not "):
+            load_case(str(bad))
