@@ -78,9 +78,10 @@ def bond_stress(loc, force, d0, cell, n):
 def hoffman_coefficients(k):
     """The Hoffman index's nine coefficients from the strengths k = (Xt, Xc, Yt, Yc, Zt, Zc,
     S23, S13, S12) Pa: three quadratic, three linear, and the shear terms' 1 / S^2 (a product
-    per shear term where a division was: the initiation check of every intact ply bond at
-    every step; the 925 ply bonds of the seed beam's 2-ply zone took 67-73 us a step, now
-    50-52 us, docs/benchmarks.md session 45)."""
+    per shear term where a division was, in the initiation check of every intact ply bond at
+    every step: the 925 ply bonds of the seed beam's 2-ply zone in a loop of their own, 67-73
+    -> 50-52 us a step; in whole runs, where the pass waits on memory, no measurable change:
+    docs/benchmarks.md session 45)."""
     Xt, Xc, Yt, Yc, Zt, Zc, S23, S13, S12 = k
     X, Y, Z = 1 / (Xt * Xc), 1 / (Yt * Yc), 1 / (Zt * Zc)
     return (0.5 * (Y + Z - X), 0.5 * (Z + X - Y), 0.5 * (X + Y - Z),
