@@ -26,6 +26,8 @@ class ProbeKind:
     qoi: Callable  # (name, fields, history[, p]) -> {qoi name: float}
     with_params: bool = False  # qoi also takes the resolved parameters (readings that need the geometry)
     reports: tuple = ()  # qoi names it reports whatever the probe's name (the others contain the name)
+    names: tuple = ()  # every qoi name it reports: {name} the probe's, a trailing * any ending (one per
+    # interface or time); a clash between two probes' is refused (one of them would vanish)
 
 
 def _point_series(built, name, f):
@@ -317,37 +319,44 @@ PROBES: dict[str, ProbeKind] = {
         {"x": Param(0.0, "x of the point", unit="m"), "y": Param(0.0, "y of the point", unit="m"),
          "z": Param(0.0, "z of the point (3D)", unit="m"),
          "component": Param("-y", "component (a leading - reverses it); z in 3D", kind="str", choices=_COMPONENTS)},
-        _point_series, _peak_qoi),
+        _point_series, _peak_qoi,
+        names=("peak_{name}", "time_of_peak_{name}", "peak_{name}_no_fracture", "{name}_change_by_fracture")),
     "contact_force": ProbeKind(
         "force between an impactor and the structure (whole width), and the impactor's velocity; qoi peak_NAME, "
         "NAME_impulse (its time integral, N s: robust where the peak is a chattering contact's largest spike)",
         {"impactor": Param("", "the impactor (an [impactors.*] name)", kind="str")},
         _contact_series, lambda name, f, h: {f"peak_{name}": float(np.max(h[name])),
-                                             f"{name}_impulse": float(trapezoid(h[name], h["time"]))}),
+                                             f"{name}_impulse": float(trapezoid(h[name], h["time"]))},
+        names=("peak_{name}", "{name}_impulse")),
     "delamination": ProbeKind(
         "debonded area (NAME_area_K), debonded and damaged lengths (NAME_length_K, damaged_interface_length_K: "
         "area / width) of each ply interface K, bottom up, whole structure; qoi: their final values",
-        {}, _delamination_series, _final_qoi(("{name}_area_", "{name}_length_", "damaged_interface_length_"))),
+        {}, _delamination_series, _final_qoi(("{name}_area_", "{name}_length_", "damaged_interface_length_")),
+        names=("{name}_area_*", "{name}_length_*", "damaged_interface_length_*")),
     "ply_cracks": ProbeKind(
         "failed intralaminar bonds in the plies of one angle (or all); qoi: the final count",
         {"angle": Param("90", "ply angle, or all", kind="str", choices=("0", "90", "all"))},
-        _ply_crack_series, _final_qoi(("{name}",))),
+        _ply_crack_series, _final_qoi(("{name}",)),
+        names=("{name}*",)),
     "zone_edge_damage": ProbeKind(
         "largest damage near the zone's edge that the far field cannot carry on (1: the zone is too narrow): "
         "interlaminar (tied far-field plies) and the plies' own; qoi: its maximum",
         {"columns": Param(2, "particle columns counted from the edge", kind="int", low=0, high=100)},
-        _zone_edge_series, _max_qoi),
+        _zone_edge_series, _max_qoi,
+        names=("{name}",)),
     "far_field_failure": ProbeKind(
         "the largest failure indices in the FEM (1 at initiation; 1 or more is damage the model leaves out): "
         "Hoffman's, and Hashin's interlaminar where the far-field plies are tied; qoi peak_NAME_hoffman "
         "(peak_NAME_interlaminar), and x_of_peak_NAME_hoffman (_interlaminar) where it was; in coupled mode a peak "
         "at 1 or more warns",
-        {}, _far_field_series, _when("{name}_hoffman")(_far_field_qoi)),
+        {}, _far_field_series, _when("{name}_hoffman")(_far_field_qoi),
+        names=tuple(f"{w}peak_{{name}}_{c}" for w in ("", "x_of_") for c in ("hoffman", "interlaminar"))),
     "impactor_motion": ProbeKind(
         "an impactor's velocity into the structure and its face's travel; qoi final_NAME_velocity",
         {"impactor": Param("", "the impactor (an [impactors.*] name)", kind="str")},
         _motion_series, _when("{name}_velocity")(lambda name, f, h: {f"final_{name}_velocity":
-                                                                       float(h[f"{name}_velocity"][-1])})),
+                                                                       float(h[f"{name}_velocity"][-1])}),
+        names=("final_{name}_velocity",)),
     "interface_damage": ProbeKind(
         "all ply interfaces together (FEM node pairs and particles), whole structure: debonded_area, damaged_area "
         "(m^2), layer_separation (largest opening, m); qoi debonded_area, damaged_area (final), "
@@ -355,30 +364,36 @@ PROBES: dict[str, ProbeKind] = {
         {}, _interface_damage_series,
         _when("debonded_area")(lambda name, f, h: {"debonded_area": float(h["debonded_area"][-1]),
                                                    "damaged_area": float(h["damaged_area"][-1]),
-                                                   "peak_layer_separation": float(np.max(h["layer_separation"]))})),
+                                                   "peak_layer_separation": float(np.max(h["layer_separation"]))}),
+        names=("debonded_area", "damaged_area", "peak_layer_separation")),
     "applied_load": ProbeKind(
         "the whole load a [loads.*] applies (N); qoi peak_NAME",
         {"load": Param("", "the load (a [loads.*] name)", kind="str")},
-        _load_series, _when("{name}")(lambda name, f, h: {f"peak_{name}": float(np.max(h[name]))})),
+        _load_series, _when("{name}")(lambda name, f, h: {f"peak_{name}": float(np.max(h[name]))}),
+        names=("peak_{name}",)),
     "fibre_stress": ProbeKind(
         "sigma_xx of the body's material at the FEM element nearest (x, y[, z]), all-FEM runs only (the "
         "reference of elastic_cracking_time); qoi peak_NAME",
         {"x": Param(0.0, "x of the point", unit="m"), "y": Param(0.0, "y of the point", unit="m"),
          "z": Param(0.0, "z of the point (3D)", unit="m")},
-        _fibre_stress_series, _when("{name}")(lambda name, f, h: {f"peak_{name}": float(np.max(h[name]))})),
+        _fibre_stress_series, _when("{name}")(lambda name, f, h: {f"peak_{name}": float(np.max(h[name]))}),
+        names=("peak_{name}",)),
     "flexural_cracks": ProbeKind(
         "cracks in a bonded beam's body (bonded beams); qoi crack_onset_time (first bond softening), "
         "crack_initiation_time (a bond at the bottom face within a depth of mid-span opens visible_opening), "
         "crack_top_time (the same at the top face within half a depth), cracked_bonds, traction_free_bonds",
         {"visible_opening": positive(0.1e-3, "crack opening counted as a crack (one seen by eye in a test is "
                                      "~0.1 mm wide)", "m")},
-        _crack_series, _when("{name}_bottom")(_crack_qoi)),
+        _crack_series, _when("{name}_bottom")(_crack_qoi),
+        names=("crack_onset_time", "crack_initiation_time", "crack_top_time", "cracked_bonds",
+               "traction_free_bonds")),
     "debonding": ProbeKind(
         "the adhesive between a bonded beam and its sheet (bonded beams): NAME_length (debonded, whole beam), "
         "NAME_damaged_length, NAME_sheet_broken; qoi debond_initiation_time, debonded_length, "
         "debonded_fraction_<at>us (of beam_length), sheet_broken_bonds",
         {"at": positive(750e-6, "the time of the debonded fraction (of the beam's and sheet's length)", "s")},
-        _debond_series, _when("{name}_length")(_debond_qoi)),
+        _debond_series, _when("{name}_length")(_debond_qoi),
+        names=("debond_initiation_time", "debonded_length", "debonded_fraction_*", "sheet_broken_bonds")),
     "panel_buckling": ProbeKind(
         "a panel's axial_force, end_shortening, deflection_A / deflection_B (mid-span, top and bottom faces), "
         "film_strain (the sublaminate's membrane strain), contact_force and interpenetration of the delaminated "
@@ -401,34 +416,14 @@ PROBES: dict[str, ProbeKind] = {
     "literature_value": ProbeKind(
         "a value from a paper or a test, reported beside the run's as qoi NAME (not checked: a check compares)",
         {"value": Param(0.0, "the value (SI)"), "source": Param("", "where it comes from", kind="str")},
-        lambda built, name, f: {}, lambda name, f, h, p: {name: f["value"]}, with_params=True),
-}
-
-
-# the qoi each kind reports ({name}: its probe's name; a trailing *: any ending, one per interface
-# or time), beside its ProbeKind.reports; a ply_cracks probe reads every series its name begins
-QOI_NAMES = {
-    "point_displacement": ("peak_{name}", "time_of_peak_{name}", "peak_{name}_no_fracture",
-                           "{name}_change_by_fracture"),
-    "contact_force": ("peak_{name}", "{name}_impulse"),
-    "delamination": ("{name}_area_*", "{name}_length_*", "damaged_interface_length_*"),
-    "ply_cracks": ("{name}*",),
-    "zone_edge_damage": ("{name}",),
-    "far_field_failure": tuple(f"{w}peak_{{name}}_{c}" for w in ("", "x_of_") for c in ("hoffman", "interlaminar")),
-    "impactor_motion": ("final_{name}_velocity",),
-    "interface_damage": ("debonded_area", "damaged_area", "peak_layer_separation"),
-    "applied_load": ("peak_{name}",),
-    "fibre_stress": ("peak_{name}",),
-    "flexural_cracks": ("crack_onset_time", "crack_initiation_time", "crack_top_time", "cracked_bonds",
-                        "traction_free_bonds"),
-    "debonding": ("debond_initiation_time", "debonded_length", "debonded_fraction_*", "sheet_broken_bonds"),
-    "literature_value": ("{name}",),
+        lambda built, name, f: {}, lambda name, f, h, p: {name: f["value"]}, with_params=True,
+        names=("{name}",)),
 }
 
 
 def qoi_names(kind: str, name: str) -> tuple[str, ...]:
     """The qoi a probe NAME of this kind reports (a trailing *: any ending)."""
-    return tuple(q.format(name=name) for q in QOI_NAMES.get(kind, ())) + PROBES[kind].reports
+    return tuple(q.format(name=name) for q in PROBES[kind].names) + PROBES[kind].reports
 
 
 def _same_qoi(a: str, b: str) -> bool:
