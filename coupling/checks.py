@@ -21,11 +21,13 @@ def bound(value: float, limit: float, source: str, upper: bool = True) -> dict:
             "passed": bool(ok), "source": source}
 
 
-def within(value: float, low: float, high: float, source: str) -> dict:
-    """Range check low <= value <= high (an observed band; a non-finite value fails)."""
+def within(value: float, low: float, high: float, source: str, tol: float | None = None) -> dict:
+    """Range check low <= value <= high (an observed band; a non-finite value fails); tol: the
+    relative tolerance the band was widened by, as the case file gives it (it read the band's
+    width, in the quantity's units)."""
     ok = math.isfinite(value) and low <= value <= high
     return {"value": float(value) if math.isfinite(value) else None, "reference": [float(low), float(high)],
-            "rel_err": None, "tol": float(high - low), "passed": bool(ok), "source": source}
+            "rel_err": None, "tol": None if tol is None else float(tol), "passed": bool(ok), "source": source}
 
 
 def energy_balance(history: dict, limit: float = 0.02) -> dict:

@@ -922,3 +922,12 @@ def test_no_far_field_element_is_shorter_than_the_particles_beside_it(plies, n, 
     if k < n:  # the most elements that allows it: one more would put a shorter one at the zone
         more = mesh.graded(xs[0], L, k + 1, ratio ** (1.0 / k), xs[0])
         assert more[1] - more[0] < d * (1 - 1e-9)
+
+
+def test_a_bracket_check_records_the_case_files_tolerance(femdem):
+    """summary.json's tol of a bracket (range) check is the relative tolerance the case file gives,
+    as a relative check's is (it was the band's width, in metres here)."""
+    code, s, err = femdem("run", "beam_impact_coarse", "--mode", "fem", "--set=clock.t_end=2e-5")
+    assert code == 0, err
+    c = s["checks"]["peak_centre_displacement"]
+    assert isinstance(c["reference"], list) and c["tol"] == s["parameters"]["checks.peak_centre_displacement.tol"]

@@ -436,7 +436,7 @@ def evaluate(study, p: dict, qoi: dict, history: dict) -> dict:
             if form.reference_qoi:
                 qoi[form.reference_qoi], qoi[form.reference_qoi + "_upper"] = ref
             if f["qoi"] in qoi:
-                checks[name] = within(qoi[f["qoi"]], (1 - tol) * ref[0], (1 + tol) * ref[1], source)
+                checks[name] = within(qoi[f["qoi"]], (1 - tol) * ref[0], (1 + tol) * ref[1], source, tol)
             continue
         if form.reference_qoi:
             qoi[form.reference_qoi] = ref
