@@ -48,7 +48,8 @@ def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool,
                          restart=restart)
     try:
         checkpoint.write_run_info(writer.dir, {"case": case.name, "case_file": str(case.path), "mode": mode,
-                                               "dem": dem, "parameters": case.parameters})
+                                               "dem": dem, "parameters": case.parameters,
+                                               "case_sha256": _digest(case.path)})
     except OSError as exc:
         if not _full(exc):
             raise
@@ -255,6 +256,8 @@ def resume(run_dir: Path, quiet: bool) -> tuple[int, Path, dict]:
         if status != "error" or checkpoint.latest(final) is None:
             raise CaseError(f"{where}: this run finished ({status}); allowed: the directory of a stopped run "
                             "(killed, or ended with an error and kept its checkpoint)")
+        if (final / "run.json").is_file():  # (before anything moves)
+            _same_case_file(_read_json(final / "run.json", where), where)
         # ended with an error (e.g. its engine worker was killed): back to .partial, continue
         try:
             os.replace(final, partial)
@@ -275,10 +278,38 @@ def resume(run_dir: Path, quiet: bool) -> tuple[int, Path, dict]:
     if bad:
         raise CaseError(f"{where}: run.json is corrupt ({bad[0]} missing or of the wrong type); "
                         "allowed: the run.json the run wrote")
+    _same_case_file(info, where)
     case = load_case(info["case_file"], info["parameters"])
     # stopped before its first checkpoint (or a procedure that has none): run it again from
     # the start, in its own directory; the result is the uninterrupted run's
     return execute(case, info["mode"], info["dem"], final, quiet, resume_from=ck_dir, restart=ck_dir is None)
+
+
+def _digest(path: Path) -> str | None:
+    """sha256 of a case file's bytes (None: unreadable)."""
+    import hashlib
+    try:
+        return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+    except OSError:
+        return None
+
+
+def _same_case_file(info: dict, where: str) -> None:
+    """CaseError unless the run's case file is as it was when the run started: run.json keeps
+    its parameters, not its tables (probes, checks, its duration), so an edited file resumed as a
+    mix of the two (a probe added: a history of nan from the checkpoint on, status ok). A run
+    begun before the digest was kept is taken as it is."""
+    want = info.get("case_sha256") if isinstance(info, dict) else None
+    if want is None:
+        return
+    path = info["case_file"]
+    now = _digest(path)
+    if now is None:
+        raise CaseError(f"{where}: its case file {path} is gone or unreadable; allowed: the file as it was when the "
+                        "run started, at that path")
+    if now != want:
+        raise CaseError(f"{where}: its case file {path} changed since the run started; allowed: the file as it "
+                        f"was, or the edited case run anew (femdem run {path})")
 
 
 def _read_json(path: Path, where: str):

@@ -274,3 +274,30 @@ def test_a_full_device_stops_the_run_in_one_line_and_it_resumes(tmp_path):
         assert json.loads((out / "summary.json").read_text())["status"] == "ok"
     finally:
         subprocess.run(["umount", "-l", str(dev)])
+
+
+def test_a_run_whose_case_file_changed_is_not_resumed(tmp_path, capsys):
+    """--resume rebuilds the case from its file and the run's parameters: a file edited since the
+    run started (a probe added, its duration changed) resumed as a mix of the two, status ok (the
+    new probe nan from the checkpoint on). Refused in one line, exit 2; the file as it was resumes."""
+    from coupling.cli import main
+    case = tmp_path / "wave.toml"
+    case.write_text((ROOT / "cases" / "verification" / "bar_wave.toml").read_text())
+    out = tmp_path / "run"
+    assert main(["run", str(case), "--set", "clock.t_end=2e-5", "--out", str(out), "--quiet"]) == 0
+    (out / "summary.json").unlink()  # as a run stopped before its first checkpoint
+    partial = Path(str(out) + ".partial")
+    out.rename(partial)
+    capsys.readouterr()
+    case.write_text(case.read_text() + "\n# edited\n")
+    assert main(["run", "--resume", str(partial), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"its case file {case} changed since the run started" in err[0], err
+    case.write_text(case.read_text().removesuffix("\n# edited\n"))
+    assert main(["run", "--resume", str(partial), "--quiet"]) == 0
+    assert json.loads((out / "summary.json").read_text())["status"] == "ok"
+    partial.mkdir()
+    (partial / "run.json").write_text(json.dumps({**json.loads((out / "run.json").read_text())}))
+    case.unlink()
+    assert main(["run", "--resume", str(partial), "--quiet"]) == 2
+    assert "is gone or unreadable" in capsys.readouterr().err
