@@ -32,6 +32,7 @@ import numpy as np
 
 from .case import Case, load_case
 from .params import CaseError, parse_set
+from .output import write_json
 from .run import execute
 
 
@@ -236,9 +237,7 @@ def bench(case_name: str, sweep: dict[str, list[str]], base: dict, ref_mode: str
     result = {"case": case_name, "mode": mode, "dem": dem, "repeat": repeat,
               "reference": {"mode": ref_mode, "set": ref_set, "cached": cached, "wall_s": statistics.median(ref_walls),
                             "wall_s_runs": ref_walls, "qoi": refs[0]["qoi"]}, "points": points}
-    tmp = out / "speed_error.json.tmp"
-    tmp.write_text(json.dumps(result, indent=1, default=str))
-    os.replace(tmp, out / "speed_error.json")
+    write_json(out / "speed_error.json", result)
     _plot(result, out / "speed_error.png")
     return result
 

@@ -5,12 +5,12 @@ relative difference from the first engine, the checks' verdicts and the wall tim
 """
 from __future__ import annotations
 
-import json
-import os
+import math
 from pathlib import Path
 
 from .case import ENGINES, load_case, refuse_ineffective
 from .params import CaseError, parse_set
+from .output import write_json
 from .run import execute, study_dir
 
 
@@ -40,18 +40,27 @@ def compare(case_name: str, engines: list[str], sets: dict, mode: str | None, ou
     rows = []
     for q in runs[first]["qoi"]:
         values = {e: runs[e]["qoi"].get(q) for e in engines}
-        ref = values[first]
-        diff = max((abs(v - ref) / abs(ref) for v in values.values() if v is not None and ref), default=0.0)
-        rows.append({"qoi": q, "values": values, "max_rel_diff": diff})
+        rows.append({"qoi": q, "values": values, "max_rel_diff": max_rel_diff(values, first)})
     result = {"case": case.name, "mode": mode, "engines": engines, "rows": rows,
               "status": {e: runs[e]["status"] for e in engines},
               "checks_passed": {e: all(c["passed"] for c in runs[e]["checks"].values()) for e in engines},
               "wall_s": {e: runs[e]["timing_s"]["total"] for e in engines},
               "dem_s": {e: runs[e]["timing_s"].get("dem", 0.0) for e in engines}}
-    tmp = out / "compare.json.tmp"
-    tmp.write_text(json.dumps(result, indent=1, default=str))
-    os.replace(tmp, out / "compare.json")
+    write_json(out / "compare.json", result)
     return result
+
+
+def max_rel_diff(values: dict, first: str) -> float | None:
+    """The largest |v - v_first| / |v_first| over the engines' values {engine: value}; None where
+    no such number says it: a value missing or not finite, or v_first = 0 beside another value
+    (0 when all are 0). It read 0 whenever the first engine's value was 0, and nan into the JSON."""
+    vals = list(values.values())
+    if not all(isinstance(v, (int, float)) and math.isfinite(v) for v in vals):
+        return None
+    ref = values[first]
+    if ref == 0:
+        return 0.0 if all(v == 0 for v in vals) else None
+    return max(abs(v - ref) / abs(ref) for v in vals)
 
 
 def cli(args) -> int:
@@ -65,7 +74,8 @@ def cli(args) -> int:
     for row in r["rows"]:
         vals = "  ".join(f"{row['values'][e]:14.6g}" if row["values"][e] is not None else f"{'n/a':>14s}"
                          for e in r["engines"])
-        print(f"  {row['qoi']:{width}s}  {vals}  {row['max_rel_diff']:.2e}")
+        diff = f"{row['max_rel_diff']:.2e}" if row["max_rel_diff"] is not None else "n/a"
+        print(f"  {row['qoi']:{width}s}  {vals}  {diff}")
     print(f"  {'status':{width}s}  " + "  ".join(f"{r['status'][e]:>14s}" for e in r["engines"]))
     print(f"  {'checks passed':{width}s}  " + "  ".join(f"{str(r['checks_passed'][e]):>14s}" for e in r["engines"]))
     print(f"  {'wall time [s]':{width}s}  " + "  ".join(f"{r['wall_s'][e]:14.3f}" for e in r["engines"]))

@@ -203,9 +203,7 @@ class RunOutput:
                 g.create_dataset(k, data=np.asarray(v, dtype=float))
             g.attrs["units"] = "SI"
         write_h5(self.dir / "history.h5", fill)
-        tmp = self.dir / "summary.json.tmp"
-        tmp.write_text(json.dumps(_no_nan(summary), indent=2, default=_jsonable, allow_nan=False) + "\n")
-        os.replace(tmp, self.dir / "summary.json")
+        write_json(self.dir / "summary.json", summary, indent=2)
         for name in ("checkpoint.old", "checkpoint.tmp") + (() if keep_checkpoint else ("checkpoint",)):
             shutil.rmtree(self.dir / name, ignore_errors=True)
         shutil.rmtree(self.dir / SCRATCH, ignore_errors=True)
@@ -215,6 +213,14 @@ class RunOutput:
         os.replace(self.dir, self.final)
         self._lock.close()
         return self.final
+
+
+def write_json(path: Path, obj, indent: int = 1) -> None:
+    """path <- obj as strict JSON (a quantity never reached, nan, as null: a bare NaN is not JSON
+    and strict readers refuse the file), through a temporary renamed over it."""
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(json.dumps(_no_nan(obj), indent=indent, default=_jsonable, allow_nan=False) + "\n")
+    os.replace(tmp, path)
 
 
 def _no_nan(x):
@@ -262,4 +268,6 @@ def _jsonable(x):
         return bool(x)
     if isinstance(x, np.ndarray):
         return x.tolist()
+    if isinstance(x, os.PathLike):
+        return str(x)
     raise TypeError(f"not JSON serialisable: {type(x)}")

@@ -145,3 +145,18 @@ def test_a_value_swept_twice_is_refused_by_its_option():
     with pytest.raises(CaseError, match=r"--sweep mesh.elements_along=10,20,10: 10 given twice"):
         parse_sweep(["mesh.elements_along=10,20,10"])
     assert parse_sweep(["mesh.elements_along=10,20"]) == {"mesh.elements_along": ["10", "20"]}
+
+
+def test_compare_s_differences_and_json_say_what_cannot_be_compared(tmp_path):
+    """compare.json held a bare NaN (not JSON: strict readers refuse it) and its max_rel_diff read 0
+    whenever the first engine's value was 0. Now: None (null, printed n/a) where no relative
+    difference is a number, and the file is strict JSON."""
+    from coupling.compare import max_rel_diff
+    from coupling.output import write_json
+    assert max_rel_diff({"a": 2.0, "b": 2.5}, "a") == pytest.approx(0.25)
+    assert max_rel_diff({"a": 0.0, "b": 1e-3}, "a") is None and max_rel_diff({"a": 0.0, "b": 0.0}, "a") == 0.0
+    assert max_rel_diff({"a": float("nan"), "b": 1.0}, "a") is None and max_rel_diff({"a": 1.0, "b": None}, "a") is None
+    path = tmp_path / "x.json"
+    write_json(path, {"v": float("nan"), "w": [1.0, float("inf")], "p": tmp_path})
+    assert json.loads(path.read_text(), parse_constant=lambda c: pytest.fail(f"non-strict JSON {c}")) == \
+        {"v": None, "w": [1.0, None], "p": str(tmp_path)}
