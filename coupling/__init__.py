@@ -29,6 +29,13 @@ def _user_cache() -> Path:
     raise SystemExit("femdem: no writable cache directory (set FEMDEM_CACHE_DIR to one)")
 
 
+# YADE reads $HOME at start (KeyError where a scheduler's environment has none): the account's
+os.environ.setdefault("HOME", str(Path.home()))
+# OpenMPI's start in process (LIGGGHTS, YADE) finds its helpers on PATH: without the system's
+# directories it aborted before MPI_Init and the process exited 1 with nothing said
+_path = [d for d in os.environ.get("PATH", "").split(os.pathsep) if d]
+os.environ["PATH"] = os.pathsep.join(_path + [d for d in os.defpath.split(os.pathsep) if d and d not in _path])
+
 # numba caches compiled kernels next to the sources by default: not writable for an ordinary
 # user of a system-wide install, and with no writable home numba fails at import. Set before
 # any package imports numba; engine worker processes inherit it.

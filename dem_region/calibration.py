@@ -140,7 +140,12 @@ def virtual_tension(scene, engine: str = "yade", axis: int = 0, strain: float = 
 
 
 def cache_dir() -> Path:
-    return Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "femdem" / "calibration"
+    """The calibrations' cache: in the project's cache directory (FEMDEM_CACHE_DIR, which the
+    orchestrator sets to one this user can write; a home that is not a directory failed here)."""
+    base = os.environ.get("FEMDEM_CACHE_DIR")
+    if base:
+        return Path(base) / "calibration"
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "femdem" / "calibration"
 
 
 def _key(scene, engine: str) -> str:

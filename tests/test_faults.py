@@ -301,3 +301,19 @@ def test_a_run_whose_case_file_changed_is_not_resumed(tmp_path, capsys):
     case.unlink()
     assert main(["run", "--resume", str(partial), "--quiet"]) == 2
     assert "is gone or unreadable" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("args, env", [
+    (["chung_ooi_1"], {}),  # a scheduler's bare environment: no PATH, no HOME (LIGGGHTS in process)
+    (["chung_ooi_1", "--dem", "yade"], {}),
+    (["bonded_block_modulus"], {"HOME": "/dev/null", "PATH": "/usr/bin:/bin"}),  # a home that is no directory
+])
+def test_a_bare_environment_runs_cases(tmp_path, args, env):
+    """Without PATH OpenMPI's start in process aborted before MPI_Init (exit 1, nothing said);
+    without HOME YADE stopped on KeyError 'HOME'; with HOME not a directory the calibration's
+    cache failed (it ignored the project's cache directory)."""
+    femdem = str(Path(sys.executable).parent / "femdem")
+    r = subprocess.run([femdem, "run", *args, "--quiet", "--out", str(tmp_path / "run")], cwd=tmp_path, env=env,
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0 and r.stderr == "", (r.returncode, r.stderr)
+    assert json.loads((tmp_path / "run" / "summary.json").read_text())["status"] == "ok"
