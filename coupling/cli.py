@@ -104,6 +104,8 @@ class _UntilReaderLeaves:
 def _kept(stop: BaseException) -> str:
     """"; the run is kept in DIR: ..." for a run stopped while it ran (run.execute names its
     directory on the exception), else ""."""
+    if getattr(stop, "hint", None):  # (a study of several runs says how it goes on)
+        return f"; {stop.hint}"
     d = getattr(stop, "run_dir", None)
     return f"; the run is kept in {d}: continue it with femdem run --resume {d}" if d and d.is_dir() else ""
 

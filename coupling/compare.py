@@ -2,16 +2,19 @@
 
 Writes compare.json and prints a table: every quantity of interest per engine, its largest
 relative difference from the first engine, the checks' verdicts and the wall time per engine.
+A comparison stopped half way (Ctrl-C, SIGTERM, a killed machine) is finished by the same
+command with the same --out: the engines' finished runs are kept, a stopped one resumed.
 """
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 
 from .case import ENGINES, load_case, refuse_ineffective
 from .params import CaseError, parse_set
-from .output import write_json
-from .run import execute, study_dir
+from .output import as_json, write_json
+from .run import execute, resume, study_dir
 
 
 def plan(case_name: str, engines: list[str], sets: dict, mode: str | None) -> tuple:
@@ -21,6 +24,9 @@ def plan(case_name: str, engines: list[str], sets: dict, mode: str | None) -> tu
         raise CaseError(f"--dem {','.join(engines)}: allowed two or more different engines of {', '.join(ENGINES)}, "
                         "comma separated")
     case = load_case(case_name, sets)
+    if mode is None and tuple(case.scene.MODES) == ("fem",):
+        raise CaseError(f"CASE {case_name}: runs all-FEM only (no DEM engine to compare); allowed: a case with a "
+                        "coupled or dem mode")
     mode = mode or case.scene.MODES[0]
     if mode == "fem":
         raise CaseError(f"--mode {mode}: an FEM-only run uses no DEM engine; allowed coupled or dem")
@@ -34,8 +40,12 @@ def compare(case_name: str, engines: list[str], sets: dict, mode: str | None, ou
     case, mode = plan(case_name, engines, sets, mode)
     runs = {}
     for engine in engines:
-        code, _, s = execute(load_case(case_name, sets), mode, engine, out / engine, quiet=True)
-        runs[engine] = s
+        try:
+            runs[engine] = _finished(out / engine, case, mode, engine) or _run(case_name, sets, mode, engine, out)
+        except BaseException as stop:
+            if not isinstance(stop, Exception):  # Ctrl-C, SIGTERM: the comparison goes on from here
+                stop.hint = f"the comparison is kept in {out}: finish it with the same command and --out {out}"
+            raise
     first = engines[0]
     rows = []
     for q in runs[first]["qoi"]:
@@ -48,6 +58,35 @@ def compare(case_name: str, engines: list[str], sets: dict, mode: str | None, ou
               "dem_s": {e: runs[e]["timing_s"].get("dem", 0.0) for e in engines}}
     write_json(out / "compare.json", result)
     return result
+
+
+def _run(case_name: str, sets: dict, mode: str, engine: str, out: Path) -> dict:
+    """One engine's run (its summary): resumed where a stopped comparison left it, else anew."""
+    partial = out / f"{engine}.partial"
+    if partial.is_dir():
+        return resume(partial, quiet=True)[2]
+    return execute(load_case(case_name, sets), mode, engine, out / engine, quiet=True)[2]
+
+
+def _finished(run_dir: Path, case, mode: str, engine: str) -> dict | None:
+    """The summary of this engine's finished run of the same case, mode and parameters in run_dir
+    (None: not run yet); CaseError for a run of another case there."""
+    path = run_dir / "summary.json"
+    if not path.is_file():
+        return None
+    s = json.loads(path.read_text())
+    same = as_json(dict(case.parameters))
+    if (s.get("case"), s.get("mode"), s.get("dem_backend"), s.get("parameters")) != (case.name, mode, engine, same):
+        raise CaseError(f"--out {run_dir.parent}: holds a run on {engine} of another case or other parameters; "
+                        "allowed: the same comparison's directory, or a new or empty one")
+    return s
+
+
+def continues(engines: list[str]):
+    """Whether a directory holds a comparison of these engines stopped half way: only their runs'
+    directories (finished or .partial), no compare.json."""
+    names = {e for e in engines} | {f"{e}.partial" for e in engines}
+    return lambda d: all(p.name in names for p in d.iterdir())
 
 
 def max_rel_diff(values: dict, first: str) -> float | None:
@@ -66,7 +105,7 @@ def max_rel_diff(values: dict, first: str) -> float | None:
 def cli(args) -> int:
     engines, sets = [e.strip() for e in args.dem.split(",")], parse_set(args.set)
     plan(args.case, engines, sets, args.mode)
-    out = study_dir(args.out, f"compare-{Path(args.case).stem}")
+    out = study_dir(args.out, f"compare-{Path(args.case).stem}", continues(engines))
     r = compare(args.case, engines, sets, args.mode, out)
     width = max(len(row["qoi"]) for row in r["rows"]) if r["rows"] else 4
     print(f"{r['case']} ({r['mode']}):")

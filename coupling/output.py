@@ -215,6 +215,12 @@ class RunOutput:
         return self.final
 
 
+def as_json(obj):
+    """obj as write_json writes it and json reads it back (nan as None, tuples as lists, numpy
+    numbers as Python's): for comparing a value with one read from a run's files."""
+    return json.loads(json.dumps(_no_nan(obj), default=_jsonable, allow_nan=False))
+
+
 def write_json(path: Path, obj, indent: int = 1) -> None:
     """path <- obj as strict JSON (a quantity never reached, nan, as null: a bare NaN is not JSON
     and strict readers refuse the file), through a temporary renamed over it."""

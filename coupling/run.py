@@ -180,12 +180,17 @@ def open_output(out: Path, resume: bool, unique: bool, restart: bool = False) ->
         raise CaseError(f"{opt} {out}: cannot be created ({exc.strerror}); allowed: a writable directory path") from None
 
 
-def study_dir(out: str | None, name: str) -> Path:
-    """The directory of a bench or compare study: --out (new or empty), or runs/<name>-<time>
-    made unique; created here, atomically, so two studies never share one."""
+def study_dir(out: str | None, name: str, continues=lambda d: False) -> Path:
+    """The directory of a bench or compare study: --out (new or empty, or one ``continues(dir)``
+    says holds this study stopped half way), or runs/<name>-<time> made unique; created here,
+    atomically, so two studies never share one."""
+    if out == "":
+        raise CaseError("--out '': empty; allowed: a directory path")
     if out:
         out = Path(out).absolute()
-        if out.exists() and (not out.is_dir() or any(out.iterdir())):
+        if out.exists() and not out.is_dir():
+            raise CaseError(f"--out {out}: exists and is a file; allowed: a new or empty directory")
+        if out.exists() and any(out.iterdir()) and not continues(out):
             raise CaseError(f"--out {out}: exists and is not an empty directory; allowed: a new or empty directory")
         try:
             out.mkdir(parents=True, exist_ok=True)

@@ -317,3 +317,30 @@ def test_a_bare_environment_runs_cases(tmp_path, args, env):
                        capture_output=True, text=True, timeout=300)
     assert r.returncode == 0 and r.stderr == "", (r.returncode, r.stderr)
     assert json.loads((tmp_path / "run" / "summary.json").read_text())["status"] == "ok"
+
+
+def test_a_stopped_comparison_is_finished_by_the_same_command(tmp_path):
+    """SIGTERM during `femdem compare`: exit 143, one line saying how it goes on; the same command
+    with the same --out keeps the finished engine's run, resumes the stopped one and writes
+    compare.json (it was refused: --out not empty, and compare.json could not be had)."""
+    out = tmp_path / "cmp"
+    cmd = [sys.executable, "-m", "coupling.cli", "compare", "coupled_vibration", "--dem", "liggghts,lammps",
+           "--set", "run.steps=3000", "--set", "output.checkpoint_every=500", "--out", str(out)]
+    proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    t0 = time.time()
+    while time.time() - t0 < 120 and proc.poll() is None and not (out / "lammps.partial" / "checkpoint").exists():
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 143 and err == (f"femdem: terminated (SIGTERM); the comparison is kept in {out}: "
+                                              f"finish it with the same command and --out {out}\n"), err
+    first = json.loads((out / "liggghts" / "summary.json").read_text())
+    r = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    result = json.loads((out / "compare.json").read_text())
+    assert result["status"] == {"liggghts": "ok", "lammps": "ok"}
+    assert json.loads((out / "liggghts" / "summary.json").read_text()) == first  # kept, not run again
+    again = [sys.executable, "-m", "coupling.cli", "compare", "coupled_vibration", "--dem", "liggghts,lammps",
+             "--set", "run.steps=2000", "--out", str(out)]  # another comparison into a finished one's directory
+    r = subprocess.run(again, cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert r.returncode == 2 and "not an empty directory" in r.stderr, r.stderr
