@@ -283,7 +283,7 @@ def test_case_files_with_a_byte_order_mark_are_read(femdem, tmp_path, encoding):
      ["laminates.beam.layup", "at most 10000"]),
     (["compare", "chain_consistency", "--dem", "yade,yade"], ["--dem yade,yade", "different"]),
     (["compare", "chain_consistency", "--dem", "yade"], ["--dem yade", "two or more"]),
-    (["compare", "bar_wave", "--dem", "yade,liggghts"], ["--mode fem"]),
+    (["compare", "bar_wave", "--dem", "yade,liggghts"], ["CASE bar_wave", "all-FEM only"]),
     (["bench", "chain_consistency", "--sweep", "clock.substeps=1,2,-1"], ["clock.substeps", "-1"]),
     (["bench", "chain_consistency", "--sweep", "clock.substeps=1,,2"], ["--sweep", "empty"]),
     (["bench", "chain_consistency", "--sweep", "clock.substeps=1", "--sweep", "clock.substeps=2"], ["twice"]),
