@@ -32,7 +32,8 @@ COMMON: dict[str, Param] = {
                              "needs more is refused before it starts, with its estimate)", kind="int", low=1,
                              high=10**12),
     "clock.substeps": Param(0, "DEM steps per FEM step; 0 = automatic", kind="int", low=0, high=1000),
-    "output.history_every": Param(0, "clock steps between history samples; 0 = about 1000 samples", kind="int", low=0),
+    "output.history_every": Param(0, "clock steps between history samples; 0 = about 1000 samples; one that leaves "
+                                  "the run fewer than 10 samples is refused", kind="int", low=0),
     "output.field_frames": Param(20, "number of XDMF frames", kind="int", low=0, high=10000),
     "output.checkpoint_every": Param(0, "clock steps between checkpoints; 0 = a tenth of runs of 5,000 "
                                      "steps or more, none for shorter ones", kind="int", low=0),

@@ -14,7 +14,7 @@ from . import checkpoint
 from .case import Case
 from .output import SCRATCH, RunInProgress, RunOutput
 from .params import CaseError
-from .simulation import Instability, run_clock
+from .simulation import Instability, refuse_sparse_history, run_clock
 
 
 class OutOfSpace(Exception):
@@ -62,6 +62,7 @@ def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool,
     status, message = "ok", ""
     try:
         sim = scene.build(case.parameters, mode, dem)
+        refuse_sparse_history(case.parameters, sim)  # (the step count is known from here)
         for line in sim.warnings:
             print(f"femdem: warning: {line}", file=sys.stderr)
         printed = len(sim.warnings)  # (the run's own warnings are printed at its end)

@@ -19,6 +19,8 @@ from typing import Callable
 
 import numpy as np
 
+from .params import CaseError
+
 # models: bond laws and impactors the coupling layer evaluates on the engine's particles
 TIMERS = ("fem", "dem", "interface", "models", "transport", "io", "orchestrator")
 
@@ -128,6 +130,35 @@ class Simulation:
     # or None; its state() goes into checkpoints, and rebuild(state) makes the Simulation a
     # resume restores
     growth: object = None
+
+
+# The qoi are read off the history: a peak is its largest sample, a duration counts samples,
+# an arrival time is a centroid. Below this many samples after t = 0 a peak falls between
+# them (0 N for a whole impact) and a centroid divides by zero, so a sparser history is refused.
+MIN_HISTORY_SAMPLES = 10
+
+
+def refuse_sparse_history(p: dict, sim: Simulation) -> None:
+    """CaseError (exit 2) for an output.history_every the run ``sim`` of ``p`` cannot use: one
+    that leaves it fewer than MIN_HISTORY_SAMPLES samples after t = 0, or one its scene
+    overrides with its own sampling (a setting with no effect). Called on the built model, before
+    it runs (run.execute: the step count is first known there)."""
+    every = p.get("output.history_every", 0)
+    if not every:  # 0: the scene's own sampling
+        return
+    n = sim.n_steps
+    samples = -(-n // every)  # ceil: the last step is always sampled
+    problem = None
+    if sim.history_every != every:
+        problem = (f"has no effect, this case samples its history every {sim.history_every} clock step(s) "
+                   "whatever it is set to; allowed: 0 (the case's own sampling)")
+    elif every > 1 and samples < min(MIN_HISTORY_SAMPLES, n):
+        most = max(1, (n - 1) // (MIN_HISTORY_SAMPLES - 1))  # the largest interval still giving that many
+        problem = (f"leaves this run of {n} clock steps {samples} history sample(s) after t = 0, fewer than "
+                   f"{MIN_HISTORY_SAMPLES} (its peaks and times are read from the history); allowed: 0 (about "
+                   f"1000 samples) or 1 to {most}")
+    if problem:
+        raise CaseError(f"output.history_every = {every}: {problem}")
 
 
 def energy_scale(e: dict[str, float]) -> float:

@@ -25,7 +25,7 @@ from fem_region import materials, mesh
 from fem_region.explicit import ExplicitDynamics
 
 from ..checks import bound
-from ..params import isotropic_material, Param, particle_size
+from ..params import CaseError, isotropic_material, Param, particle_size
 from ..participants.fem import make_region
 from ..participants.coupled import COUPLING, coupled_simulation
 
@@ -49,7 +49,17 @@ PARAMETERS = {
 }
 
 
+def refuse_no_strain(p: dict) -> None:
+    """CaseError (exit 2) for an all-zero strain: no stress, nothing to test (the residuals are
+    relative to the uniform stress's edge force, which would be 0)."""
+    keys = ("strain.xx", "strain.yy", "strain.xy")
+    if all(p[k] == 0.0 for k in keys):
+        raise CaseError(f"{', '.join(f'{k} = 0' for k in keys)}: no strain, nothing to test (the residuals are "
+                        "relative to its stress); allowed: at least one component nonzero, each in [-0.01, 0.01]")
+
+
 def build(p: dict, mode: str, dem: str):
+    refuse_no_strain(p)  # (before the engine starts)
     r = 0.5 * p["zone.particle_size"]
     d = 2 * r
     h = p["mesh.spacing_ratio"] * d

@@ -21,7 +21,7 @@ from .disc import disc
 from .panel import panel as assemble_panel
 from .growth import Growth
 from .placement import estimate, place
-from .schema import BONDED, KIND_KEY, LAMINATED, MODES, document, parameters
+from .schema import BONDED, KIND_KEY, LAMINATED, MODES, document, parameters, section
 
 __all__ = ["Study", "document_schema", "renamed"]
 
@@ -361,12 +361,19 @@ class Study:
         return qoi, closed_forms.evaluate(self, p, qoi, history)
 
     def run_warnings(self, p: dict, history: dict, qoi: dict, mode: str) -> list[str]:
-        """What a finished run should say beside its qoi: in coupled mode, a far_field_failure
-        probe whose index reached 1 (damage the FEM cannot take: probes.left_out)."""
-        if mode != "coupled":
-            return []
-        return [line for name, kind in self.layout.names["probes"].items() if kind == "far_field_failure"
-                for line in probes.left_out(name, history, qoi)]
+        """What a finished run should say beside its qoi: a point_displacement probe whose peak a
+        check judges and which is the run's last sample (probes.peak_at_end: a peak still rising
+        at the end is no peak; a probe no check reads, e.g. the CFRP beam's deflection under its
+        rising load, is a history, not a peak); in coupled mode, a far_field_failure probe whose
+        index reached 1 (damage the FEM cannot take: probes.left_out)."""
+        judged = {section(p, f"checks.{c}")["qoi"] for c in self.layout.names["checks"]}
+        lines = []
+        for name, kind in self.layout.names["probes"].items():
+            if kind == "point_displacement" and f"peak_{name}" in judged:
+                lines += probes.peak_at_end(name, history)
+            elif kind == "far_field_failure" and mode == "coupled":
+                lines += probes.left_out(name, history, qoi)
+        return lines
 
     def plot(self, p: dict, history: dict, qoi: dict, plots_dir):
         from . import plots

@@ -194,6 +194,24 @@ def left_out(name: str, h: dict, qoi: dict) -> list[str]:
     return lines
 
 
+def peak_at_end(name: str, h: dict) -> list[str]:
+    """A warning for a point_displacement probe NAME whose peak is the history's last sample:
+    still rising when the run ended, so peak_NAME and time_of_peak_NAME may not be the peak's.
+    h: the history, h[NAME] (n,) m and h["time"] (n,) s."""
+    u, time = np.asarray(h.get(name, [])), np.asarray(h["time"])
+    if u.size < 2 or int(np.argmax(u)) != u.size - 1:  # (argmax: the first of equal values)
+        return []
+    return [f"peak_{name} = {u[-1]:.4g} m is at the run's last sample (t = {time[-1]:.4g} s): the run may end "
+            "before the peak; a longer clock.t_end finds it"]
+
+
+def at_time(at: float, time: np.ndarray, series: np.ndarray) -> float:
+    """``series`` (n,) at time ``at`` (s) of the samples ``time`` (n,) s, linearly interpolated;
+    nan after the run's last sample (np.interp would hold the last value: a moment the run
+    never reached)."""
+    return float(np.interp(at, time, series)) if at <= time[-1] * (1 + 1e-9) else float("nan")
+
+
 def first_time(time: np.ndarray, series: np.ndarray) -> float:
     """First sample time at which ``series`` > 0 (nan if never)."""
     hit = np.flatnonzero(np.asarray(series) > 0)
@@ -267,7 +285,7 @@ def _debond_qoi(name, f, h):
     time, length = np.asarray(h["time"]), np.asarray(h[f"{name}_length"])
     at = f["at"]
     return {"debond_initiation_time": first_time(time, length), "debonded_length": float(length[-1]),
-            f"debonded_fraction_{round(at * 1e6)}us": float(np.interp(at, time, length)) / f["beam_length"],
+            f"debonded_fraction_{round(at * 1e6)}us": at_time(at, time, length) / f["beam_length"],
             "sheet_broken_bonds": float(h[f"{name}_sheet_broken"][-1])}
 
 
