@@ -52,7 +52,7 @@ def test_chung_ooi_3_restitution(femdem, material, e):
 # calibrates it on LIGGGHTS and LAMMPS (tests/test_engines.py::test_bonded_block)
 @pytest.mark.parametrize("kind", [pytest.param("square", marks=pytest.mark.slow), "hexagonal"])
 def test_bonded_block_modulus_calibration(femdem, kind, tmp_path, monkeypatch):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    monkeypatch.setenv("FEMDEM_CACHE_DIR", str(tmp_path / "cache" / "femdem"))
     code, s, _ = femdem("run", "bonded_block_modulus", "--dem", "yade", "--set", f"packing.kind={kind}")
     assert code == 0
     assert_checks(s)
@@ -64,7 +64,7 @@ def test_bonded_block_modulus_calibration(femdem, kind, tmp_path, monkeypatch):
 
 
 def test_bond_strength(femdem, tmp_path, monkeypatch):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    monkeypatch.setenv("FEMDEM_CACHE_DIR", str(tmp_path / "cache" / "femdem"))
     code, s, _ = femdem("run", "bond_strength", "--dem", "yade")
     assert code == 0
     assert_checks(s)
@@ -72,7 +72,7 @@ def test_bond_strength(femdem, tmp_path, monkeypatch):
 
 @pytest.mark.slow  # suite budget: YADE's law path runs in tests/test_study.py's coupled-yade runs
 def test_bonded_beam_bending(femdem, tmp_path, monkeypatch):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    monkeypatch.setenv("FEMDEM_CACHE_DIR", str(tmp_path / "cache" / "femdem"))
     code, s, _ = femdem("run", "bonded_beam_bending", "--dem", "yade")
     assert code == 0
     assert_checks(s)
