@@ -298,12 +298,13 @@ def test_laws_hosted_in_a_worker_give_the_in_process_run_bit_for_bit(femdem, tmp
     the engine's arrays, before the interface forces are read (so that those include their
     forces on tied particles: missed once, LAMMPS gave 0.35 instead of 0.39 mm in
     beam_impact_coarse); the orchestrator's copies are synced before every read. The CFRP
-    beam over 0.3 ms: the same engine in-process and in a worker gives every qoi and history
+    beam over 0.15 ms (0.3 ms before the suite's ten minutes, session 45: the property is the
+    same at any length): the same engine in-process and in a worker gives every qoi and history
     series to the bit; LAMMPS agrees to 1e-9."""
     import h5py
     runs = []
     for args in (["--dem", "liggghts"], ["--dem", "liggghts", "--set=dem.process=worker"], ["--dem", "lammps"]):
-        code, s, err = femdem("run", "cfrp_beam_impact_coarse", "--set=clock.t_end=3e-4", *args)
+        code, s, err = femdem("run", "cfrp_beam_impact_coarse", "--set=clock.t_end=1.5e-4", *args)
         assert code == 0, (err, s and s["message"])
         runs.append(s)
     here, worker, lammps = runs

@@ -325,7 +325,7 @@ def test_a_stopped_comparison_is_finished_by_the_same_command(tmp_path):
     compare.json (it was refused: --out not empty, and compare.json could not be had)."""
     out = tmp_path / "cmp"
     cmd = [sys.executable, "-m", "coupling.cli", "compare", "coupled_vibration", "--dem", "liggghts,lammps",
-           "--set", "run.steps=3000", "--set", "output.checkpoint_every=500", "--out", str(out)]
+           "--set", "run.steps=1500", "--set", "output.checkpoint_every=300", "--out", str(out)]
     proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     t0 = time.time()
     while time.time() - t0 < 120 and proc.poll() is None and not (out / "lammps.partial" / "checkpoint").exists():
@@ -341,6 +341,6 @@ def test_a_stopped_comparison_is_finished_by_the_same_command(tmp_path):
     assert result["status"] == {"liggghts": "ok", "lammps": "ok"}
     assert json.loads((out / "liggghts" / "summary.json").read_text()) == first  # kept, not run again
     again = [sys.executable, "-m", "coupling.cli", "compare", "coupled_vibration", "--dem", "liggghts,lammps",
-             "--set", "run.steps=2000", "--out", str(out)]  # another comparison into a finished one's directory
+             "--set", "run.steps=1000", "--out", str(out)]  # another comparison into a finished one's directory
     r = subprocess.run(again, cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert r.returncode == 2 and "not an empty directory" in r.stderr, r.stderr

@@ -653,7 +653,9 @@ def test_a_coupled_beam_is_tied_into_triangles(femdem, tmp_path):
     assert abs(peaks[0] / peaks[1] - 1) < 0.03, peaks
 
 
-@pytest.mark.parametrize("mode, dem", [("fem", None), ("coupled", "liggghts")])
+# coupled with -m slow (11 s, the suite's ten minutes, session 45): the all-FEM run joins the
+# same node-to-face bonds, the coupled one adds the zone beside them
+@pytest.mark.parametrize("mode, dem", [("fem", None), pytest.param("coupled", "liggghts", marks=pytest.mark.slow)])
 def test_ply_runs_meshed_apart_are_joined_node_to_face(femdem, tmp_path, mode, dem):
     """A mesh file whose ply runs are meshed apart (issue #24's non-matching meshes): with a
     cohesive far field their interfaces are joined node to face, and the beam answers as the

@@ -102,6 +102,10 @@ def test_a_conversion_keeps_momentum_and_the_window_only_grows_by_mesh_lines():
         assert nel_old - nel_new == 2 * round((x_to - x_from) / e)
 
 
+# -m slow (16 s, the suite's ten minutes, session 45): the suite's growing windows run on law
+# springs (test_a_grown_window_answers_as_the_whole_crack_path_s[dcb_coarse] against a fixed
+# window); this is the one-off check that law springs are the engine's
+@pytest.mark.slow
 def test_law_springs_give_the_engine_springs_results():
     """A fixed window whose lattice springs are law bonds (as a growing window's) against the
     same window with the engine's springs: the peak load and the initial compliance within
