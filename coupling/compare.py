@@ -41,7 +41,7 @@ def compare(case_name: str, engines: list[str], sets: dict, mode: str | None, ou
     runs = {}
     for engine in engines:
         try:
-            runs[engine] = _finished(out / engine, case, mode, engine) or _run(case_name, sets, mode, engine, out)
+            runs[engine] = _finished(out / engine, case, mode, engine) or _run(case_name, case, sets, mode, engine, out)
         except BaseException as stop:
             if not isinstance(stop, Exception):  # Ctrl-C, SIGTERM: the comparison goes on from here
                 stop.hint = f"the comparison is kept in {out}: finish it with the same command and --out {out}"
@@ -60,10 +60,12 @@ def compare(case_name: str, engines: list[str], sets: dict, mode: str | None, ou
     return result
 
 
-def _run(case_name: str, sets: dict, mode: str, engine: str, out: Path) -> dict:
-    """One engine's run (its summary): resumed where a stopped comparison left it, else anew."""
+def _run(case_name: str, case, sets: dict, mode: str, engine: str, out: Path) -> dict:
+    """One engine's run (its summary): resumed where a stopped comparison of the same case left
+    it, else anew."""
     partial = out / f"{engine}.partial"
     if partial.is_dir():
+        _same_run(json.loads((partial / "run.json").read_text()), case, mode, engine, out)
         return resume(partial, quiet=True)[2]
     return execute(load_case(case_name, sets), mode, engine, out / engine, quiet=True)[2]
 
@@ -75,11 +77,18 @@ def _finished(run_dir: Path, case, mode: str, engine: str) -> dict | None:
     if not path.is_file():
         return None
     s = json.loads(path.read_text())
-    same = as_json(dict(case.parameters))
-    if (s.get("case"), s.get("mode"), s.get("dem_backend"), s.get("parameters")) != (case.name, mode, engine, same):
-        raise CaseError(f"--out {run_dir.parent}: holds a run on {engine} of another case or other parameters; "
-                        "allowed: the same comparison's directory, or a new or empty one")
+    _same_run({**s, "dem": s.get("dem_backend")}, case, mode, engine, run_dir.parent)
     return s
+
+
+def _same_run(info: dict, case, mode: str, engine: str, out: Path) -> None:
+    """CaseError unless ``info`` (a run's run.json or summary.json) is this comparison's run on
+    ``engine``: the same case, mode and parameters (a stopped run of other --set values would be
+    finished and compared as this one's)."""
+    if (info.get("case"), info.get("mode"), info.get("dem"), info.get("parameters")) != \
+            (case.name, mode, engine, as_json(dict(case.parameters))):
+        raise CaseError(f"--out {out}: holds a run on {engine} of another case or other parameters; "
+                        "allowed: the same comparison's directory, or a new or empty one")
 
 
 def continues(engines: list[str]):

@@ -335,6 +335,13 @@ def test_a_stopped_comparison_is_finished_by_the_same_command(tmp_path):
     assert proc.returncode == 143 and err == (f"femdem: terminated (SIGTERM); the comparison is kept in {out}: "
                                               f"finish it with the same command and --out {out}\n"), err
     first = json.loads((out / "liggghts" / "summary.json").read_text())
+    other = [c if c != "run.steps=1500" else "run.steps=1400" for c in cmd]  # not this comparison's
+    r = subprocess.run(other, cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert r.returncode == 2 and "holds a run on liggghts of another case or other parameters" in r.stderr, r.stderr
+    shutil.copytree(out / "lammps.partial", tmp_path / "alone" / "lammps.partial")  # the stopped run alone
+    r = subprocess.run([c if c != str(out) else str(tmp_path / "alone") for c in other], cwd=ROOT,
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 2 and "holds a run on lammps of another case or other parameters" in r.stderr, r.stderr
     r = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr
     result = json.loads((out / "compare.json").read_text())
