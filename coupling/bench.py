@@ -100,9 +100,7 @@ def reference(case_name: str, overrides: dict, mode: str, dem: str, out: Path,
     if code:
         raise CaseError(f"reference run ({mode}) did not finish: {summary['message']}")
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_suffix(".tmp")
-    tmp.write_text(json.dumps(summary, default=str))
-    os.replace(tmp, path)
+    write_json(path, summary)
     return summary, False
 
 

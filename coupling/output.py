@@ -225,7 +225,11 @@ def write_json(path: Path, obj, indent: int = 1) -> None:
     """path <- obj as strict JSON (a quantity never reached, nan, as null: a bare NaN is not JSON
     and strict readers refuse the file), through a temporary renamed over it."""
     tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json.dumps(_no_nan(obj), indent=indent, default=_jsonable, allow_nan=False) + "\n")
+    try:
+        tmp.write_text(json.dumps(_no_nan(obj), indent=indent, default=_jsonable, allow_nan=False) + "\n")
+    except BaseException:
+        tmp.unlink(missing_ok=True)  # (a full device: nothing half-written left beside the file)
+        raise
     os.replace(tmp, path)
 
 
