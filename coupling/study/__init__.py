@@ -554,40 +554,18 @@ def _hourglass(p: dict, changed: set) -> None:
 
 
 def load_file_rows(key: str, path: str) -> list[tuple[float, float]]:
-    """The rows time,value of a load's CSV file (header and # lines skipped, as
-    fem_region.loads.tabulated reads it), refused as an inline curve would be: two finite
-    columns, at least two rows, times increasing; UTF-8 text."""
+    """fem_region.loads.read_rows of a load's CSV file, its faults refused as an inline curve's
+    are: one line naming the key and the file."""
+    from fem_region.loads import read_rows
     try:
-        raw = Path(path).read_bytes()
-        text = raw.decode("utf-8")
+        return read_rows(path)
     except UnicodeDecodeError as exc:
-        raise CaseError(f"{key} = {path!r}: not UTF-8 text (byte {raw[exc.start]:#04x} at offset {exc.start}); "
+        raise CaseError(f"{key} = {path!r}: not UTF-8 text (byte {exc.object[exc.start]:#04x} at offset {exc.start}); "
                         "allowed: a UTF-8 CSV file of time,value rows") from None
     except OSError as exc:
         raise CaseError(f"{key} = {path!r}: cannot be read ({exc.strerror}); allowed: a readable CSV file") from None
-    rows = []
-    for number, line in enumerate(text.splitlines(), 1):
-        line = line.strip()
-        if not line or line.startswith("#"):
-            continue
-        try:
-            row = [float(x) for x in line.split(",")]
-        except ValueError:
-            if rows:  # a header comes first; a row that is not numbers after the data would be dropped
-                raise CaseError(f"{key} = {path!r}: line {number} {line!r} is not numbers; allowed: a header, then "
-                                "rows time,value") from None
-            continue
-        if len(row) != 2 or not all(map(np.isfinite, row)):
-            why = f"{len(row)} columns" if len(row) != 2 else "not finite"
-            raise CaseError(f"{key} = {path!r}: line {number} {line!r}: {why}; allowed: two columns time,value of "
-                            "finite numbers")
-        rows.append((row[0], row[1]))
-    if len(rows) < 2:
-        raise CaseError(f"{key} = {path!r}: {len(rows)} row(s) of numbers; allowed: at least two rows time,value")
-    for a, b in zip(rows, rows[1:]):
-        if b[0] <= a[0]:
-            raise CaseError(f"{key} = {path!r}: time {b[0]:g} after {a[0]:g}; allowed: times increasing")
-    return rows
+    except ValueError as exc:
+        raise CaseError(f"{key} = {path!r}: {exc}") from None
 
 
 def resolve_files(p: dict, keys, folder: Path) -> None:
