@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .case import Case, load_case
+from .case import Case, input_digests, load_case
 from .params import CaseError, parse_set
 from .output import write_json
 from .run import execute
@@ -43,32 +43,11 @@ def _cache_dir() -> Path:
 
 def _key(case: Case, mode: str, dem: str) -> str:
     """The cache's name for a reference run: its parameters, mode and engine, and the contents
-    of the files they name (a load curve's CSV edited in place is another reference)."""
-    key = {"p": case.parameters, "mode": mode, "dem": dem}
-    files = _file_digests(case)
-    if files:  # (only then: a case without files keeps the key, and the cached run, it had)
-        key["files"] = files
+    of its case file and of the files its parameters name (a load curve's CSV edited in place is
+    another reference)."""
+    key = {"p": case.parameters, "mode": mode, "dem": dem, "files": input_digests(case.path, case.parameters)}
     blob = json.dumps(key, sort_keys=True, default=str)
     return hashlib.sha1(blob.encode()).hexdigest()[:20]
-
-
-def _file_digests(case: Case) -> dict[str, str]:
-    """{key: sha1 of the file's bytes} of every parameter that names a file (``mesh.file``,
-    ``loads.NAME.file``), a relative path read from the case file's folder as load_case does;
-    a file that cannot be read is named "unreadable" (the run itself then says why)."""
-    digests = {}
-    for key, value in case.parameters.items():
-        leaf = key.rsplit(".", 1)[-1]
-        if not ((leaf == "file" or leaf.endswith("_file")) and isinstance(value, str) and value):
-            continue
-        path = Path(value).expanduser()
-        path = path if path.is_absolute() else case.path.parent / path
-        try:
-            with open(path, "rb") as f:
-                digests[key] = hashlib.file_digest(f, "sha1").hexdigest()
-        except OSError:
-            digests[key] = "unreadable"
-    return digests
 
 
 def parse_sweep(items: list[str]) -> dict[str, list[str]]:

@@ -146,6 +146,23 @@ ZONE_GROWTH = ("zone.grow", "zone.grow_at", "zone.grow_to", "zone.grow_every", "
                "zone.margin")
 
 
+def input_digests(case_file: str | Path, parameters: dict) -> dict[str, str]:
+    """{"case_file" or a parameter's key: sha256 of the file's bytes} of every file a run reads as
+    its input: the case file and each file a parameter names (a mesh, a load curve: keys ending
+    in "file", their paths resolved by load_case); "unreadable" for one that cannot be read. What
+    a cached reference (bench) and a resumed run (run.resume) must find unchanged."""
+    import hashlib
+    files = {"case_file": case_file, **{k: v for k, v in parameters.items()
+                                       if k.rsplit(".", 1)[-1].endswith("file") and isinstance(v, str) and v}}
+    out = {}
+    for key, path in files.items():
+        try:
+            out[key] = hashlib.sha256(Path(path).read_bytes()).hexdigest()
+        except OSError:
+            out[key] = "unreadable"
+    return out
+
+
 def refuse_ineffective(case: Case, mode: str, dem: str | None, reference: bool = False) -> None:
     """CaseError for a setting that would change nothing in this configuration (a user who
     sets it expects an effect): DEM and coupling keys of --set in a run without them, a

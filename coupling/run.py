@@ -11,7 +11,7 @@ import time
 from pathlib import Path
 
 from . import checkpoint
-from .case import Case
+from .case import Case, input_digests
 from .output import SCRATCH, RunInProgress, RunOutput
 from .params import CaseError
 from .simulation import Instability, refuse_sparse_history, run_clock
@@ -49,7 +49,7 @@ def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool,
     try:
         checkpoint.write_run_info(writer.dir, {"case": case.name, "case_file": str(case.path), "mode": mode,
                                                "dem": dem, "parameters": case.parameters,
-                                               "case_sha256": _digest(case.path)})
+                                               "inputs": input_digests(case.path, case.parameters)})
     except OSError as exc:
         if not _full(exc):
             raise
@@ -291,31 +291,24 @@ def resume(run_dir: Path, quiet: bool) -> tuple[int, Path, dict]:
     return execute(case, info["mode"], info["dem"], final, quiet, resume_from=ck_dir, restart=ck_dir is None)
 
 
-def _digest(path: Path) -> str | None:
-    """sha256 of a case file's bytes (None: unreadable)."""
-    import hashlib
-    try:
-        return hashlib.sha256(Path(path).read_bytes()).hexdigest()
-    except OSError:
-        return None
-
-
 def _same_case_file(info: dict, where: str) -> None:
-    """CaseError unless the run's case file is as it was when the run started: run.json keeps
-    its parameters, not its tables (probes, checks, its duration), so an edited file resumed as a
-    mix of the two (a probe added: a history of nan from the checkpoint on, status ok). A run
-    begun before the digest was kept is taken as it is."""
-    want = info.get("case_sha256") if isinstance(info, dict) else None
-    if want is None:
+    """CaseError unless the run's input files (its case file, a mesh, a load curve) are as they
+    were when the run started: run.json keeps its parameters, not its tables (probes, checks, its
+    duration) nor the files' contents, so an edited file resumed as a mix of the two (a probe
+    added: a history of nan from the checkpoint on, status ok). A run begun before the digests
+    were kept is taken as it is."""
+    want = info.get("inputs") if isinstance(info, dict) else None
+    if not isinstance(want, dict):
         return
-    path = info["case_file"]
-    now = _digest(path)
-    if now is None:
-        raise CaseError(f"{where}: its case file {path} is gone or unreadable; allowed: the file as it was when the "
-                        "run started, at that path")
-    if now != want:
-        raise CaseError(f"{where}: its case file {path} changed since the run started; allowed: the file as it "
-                        f"was, or the edited case run anew (femdem run {path})")
+    now = input_digests(info["case_file"], info["parameters"])
+    for key, digest in want.items():
+        path = info["case_file"] if key == "case_file" else info["parameters"].get(key)
+        if now.get(key) == "unreadable":
+            raise CaseError(f"{where}: its input {path} ({key}) is gone or unreadable; allowed: the file as it was "
+                            "when the run started, at that path")
+        if now.get(key) != digest:
+            raise CaseError(f"{where}: its input {path} ({key}) changed since the run started; allowed: the file as "
+                            f"it was, or the edited case run anew (femdem run {info['case_file']})")
 
 
 def _read_json(path: Path, where: str):

@@ -62,22 +62,22 @@ def test_a_reference_runs_again_when_a_file_its_case_reads_changes(tmp_path, fak
 
 
 def test_the_key_reads_the_files_the_case_names_and_survives_a_missing_one(tmp_path):
+    from coupling.case import input_digests
     case = load_case(str(pressed_block(tmp_path, 0.7)))
-    assert set(bench._file_digests(case)) == {"mesh.file", "loads.press.file"}
+    assert set(input_digests(case.path, case.parameters)) == {"case_file", "mesh.file", "loads.press.file"}
     before = bench._key(case, "fem", "yade")
     (tmp_path / "press.csv").unlink()  # (removed after loading: the run then says so)
-    assert bench._file_digests(case)["loads.press.file"] == "unreadable"
+    assert input_digests(case.path, case.parameters)["loads.press.file"] == "unreadable"
     assert bench._key(case, "fem", "yade") != before
 
 
-def test_a_case_that_names_no_file_keeps_its_cached_reference():
-    """A case without files keys its reference as before the files counted: no cached reference
-    made obsolete."""
-    import hashlib
-    case = load_case("bar_wave")
-    old = hashlib.sha1(json.dumps({"p": case.parameters, "mode": "fem", "dem": "yade"}, sort_keys=True,
-                                  default=str).encode()).hexdigest()[:20]
-    assert bench._file_digests(case) == {} and bench._key(case, "fem", "yade") == old
+def test_an_edited_case_file_is_another_reference(tmp_path):
+    """The case file's own contents count too: a probe or check added to it changes the
+    reference's qoi, though not its parameters."""
+    path = pressed_block(tmp_path, 0.7)
+    before = bench._key(load_case(str(path)), "fem", "yade")
+    path.write_text(path.read_text() + "\n# edited\n")
+    assert bench._key(load_case(str(path)), "fem", "yade") != before
 
 
 def test_a_point_whose_error_is_not_finite_is_never_pareto_optimal():

@@ -292,7 +292,7 @@ def test_a_run_whose_case_file_changed_is_not_resumed(tmp_path, capsys):
     case.write_text(case.read_text() + "\n# edited\n")
     assert main(["run", "--resume", str(partial), "--quiet"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and f"its case file {case} changed since the run started" in err[0], err
+    assert len(err) == 1 and f"its input {case} (case_file) changed since the run started" in err[0], err
     case.write_text(case.read_text().removesuffix("\n# edited\n"))
     assert main(["run", "--resume", str(partial), "--quiet"]) == 0
     assert json.loads((out / "summary.json").read_text())["status"] == "ok"
@@ -351,3 +351,19 @@ def test_a_stopped_comparison_is_finished_by_the_same_command(tmp_path):
              "--set", "run.steps=1000", "--out", str(out)]  # another comparison into a finished one's directory
     r = subprocess.run(again, cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert r.returncode == 2 and "not an empty directory" in r.stderr, r.stderr
+
+
+def test_a_run_whose_load_file_changed_is_not_resumed(tmp_path):
+    """The same for a file a parameter names (a load curve): its contents were not in run.json."""
+    from coupling.case import input_digests
+    from coupling.params import CaseError
+    from coupling.run import _same_case_file
+    case, curve = tmp_path / "c.toml", tmp_path / "load.csv"
+    case.write_text("# a case\n")
+    curve.write_text("0,0\n1,1\n")
+    params = {"loads.press.file": str(curve)}
+    info = {"case_file": str(case), "parameters": params, "inputs": input_digests(case, params)}
+    _same_case_file(info, "--resume X")  # unchanged: taken
+    curve.write_text("0,0\n1,10\n")
+    with pytest.raises(CaseError, match=r"its input .*load.csv \(loads.press.file\) changed since the run started"):
+        _same_case_file(info, "--resume X")
