@@ -171,9 +171,7 @@ class FemRegion:
         self.ke = self._element_stiffness()
         self._conn = np.ascontiguousarray(self.mesh.t.T)
         self._D_rules = [np.ascontiguousarray(self._masked_D(q.voigt)) for q in self.rules]
-        r = np.repeat(self._edofs, self._edofs.shape[1], axis=1).ravel()
-        c = np.tile(self._edofs, (1, self._edofs.shape[1])).ravel()
-        self.K = sp.csr_matrix((self.ke.ravel(), (r, c)), shape=(self.ndof, self.ndof))
+        self.K = self._assemble(self.ke)
 
     # -- sizes -----------------------------------------------------------------------------
     @property
@@ -282,9 +280,7 @@ class FemRegion:
         e = np.asarray(elements, int)
         f = np.zeros((self.n_nodes, self.dim))
         if self.formulation == "linear":
-            ed, ke = self._edofs[e], self.ke[e]
-            r, c = np.repeat(ed, ed.shape[1], axis=1).ravel(), np.tile(ed, (1, ed.shape[1])).ravel()
-            K = sp.csr_matrix((ke.ravel(), (r, c)), shape=(self.ndof, self.ndof))
+            K = self._assemble(self.ke[e], e)
             return lambda u: sparse_times(K, u, f)
         voigt = VOIGT_2D if self.dim == 2 else VOIGT_3D
         conn = np.ascontiguousarray(self._conn[e])
@@ -308,12 +304,15 @@ class FemRegion:
         return self.hg is not None and self.hg.form == "viscous"
 
     def hourglass_damping(self) -> sp.csr_matrix:
-        """(ndof, ndof) kg/s: the viscous hourglass form's damping matrix (zero without it)."""
-        if not self.viscous_hourglass:
-            return sp.csr_matrix((self.ndof, self.ndof))
-        r = np.repeat(self._edofs, self._edofs.shape[1], axis=1).ravel()
-        c = np.tile(self._edofs, (1, self._edofs.shape[1])).ravel()
-        return sp.csr_matrix((self.hg.damping(self.dim).ravel(), (r, c)), shape=(self.ndof, self.ndof))
+        """(ndof, ndof) kg/s: the viscous hourglass form's damping matrix (with that form)."""
+        return self._assemble(self.hg.damping(self.dim))
+
+    def _assemble(self, me: np.ndarray, elements: np.ndarray | None = None) -> sp.csr_matrix:
+        """(ndof, ndof): the element matrices me (k, n_loc dim, n_loc dim) summed on the DOFs of
+        ``elements`` (k,) (default: every element)."""
+        ed = self._edofs if elements is None else self._edofs[elements]
+        r, c = np.repeat(ed, ed.shape[1], axis=1).ravel(), np.tile(ed, (1, ed.shape[1])).ravel()
+        return sp.csr_matrix((me.ravel(), (r, c)), shape=(self.ndof, self.ndof))
 
     def add_hourglass_viscous_force(self, v: np.ndarray, out: np.ndarray) -> None:
         """out (n_nodes, dim) N += the viscous hourglass form's force at velocity v, if that form."""
