@@ -22,8 +22,6 @@ from __future__ import annotations
 import hashlib
 import itertools
 import json
-import math
-import numbers
 import os
 import statistics
 from pathlib import Path
@@ -31,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from .case import Case, input_digests, load_case
+from .checks import relative_difference
 from .params import CaseError, parse_set
 from .output import write_json
 from .run import execute
@@ -137,29 +136,15 @@ def compared_qoi(p: dict, qoi: dict, ref_qoi: dict) -> list[str]:
             and q not in zone_edge]
 
 
-def _reached(x) -> bool:
-    """A quantity the run reached: a finite number (nan or None: never, e.g. a wave's arrival
-    after t_end)."""
-    return isinstance(x, numbers.Real) and math.isfinite(x)
-
-
 def relative_errors(names: list[str], qoi: dict, ref_qoi: dict) -> tuple[dict[str, float], dict[str, str], bool]:
-    """(|q - q_ref| / |q_ref| of the names both runs reached, {name: why it is not compared},
-    whether a name was reached in one run only: the runs then disagree on whether it happened
-    at all, and no relative error says by how much)."""
+    """(|q - q_ref| / |q_ref| of the names both runs reached, {name: why it is not compared}
+    (checks.relative_difference), whether a name was reached in one run only: the runs then
+    disagree on whether it happened at all, and no relative error says by how much)."""
     errors, why = {}, {}
     for q in names:
-        x, x_ref = qoi.get(q), ref_qoi.get(q)
-        if not _reached(x) or not _reached(x_ref):
-            why[q] = ("reached in neither run" if not _reached(x) and not _reached(x_ref) else
-                      "not reached in this run" if not _reached(x) else "not reached in the reference")
-        elif x_ref == 0 and x != 0:  # x/0: no relative scale (the two values are in the qoi)
-            why[q] = "0 in the reference"
-        elif x_ref == 0:
-            errors[q] = 0.0
-        else:
-            errors[q] = abs(x - x_ref) / abs(x_ref)
-    one_sided = any(_reached(qoi.get(q)) != _reached(ref_qoi.get(q)) for q in names)
+        d = relative_difference(qoi.get(q), ref_qoi.get(q))
+        (why if isinstance(d, str) else errors)[q] = d
+    one_sided = any(w.startswith("not reached") for w in why.values())
     return errors, why, one_sided
 
 

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import math
+import numbers
 
 
 def check(value: float, reference: float, tol: float, source: str) -> dict:
@@ -35,3 +36,16 @@ def energy_balance(history: dict, limit: float = 0.02) -> dict:
     relative to the largest energy, at most ``limit``."""
     return bound(abs(float(history["balance_error_rel"][-1])), limit,
                  "energy ledger: external work = kinetic + internal + dissipated")
+
+
+def relative_difference(x, ref) -> float | str:
+    """|x - ref| / |ref|, or why no such number exists: a quantity not reached (nan or None) in
+    one run or both, or ref = 0 beside another value (0 when both are 0). bench and compare
+    report the reason where a number would mislead (nan, or a 0 when ref was 0)."""
+    reached = lambda v: isinstance(v, numbers.Real) and math.isfinite(v)
+    if not reached(x) or not reached(ref):
+        return ("reached in neither run" if not reached(x) and not reached(ref) else
+                "not reached in this run" if not reached(x) else "not reached in the reference")
+    if ref == 0:
+        return 0.0 if x == 0 else "0 in the reference"
+    return abs(x - ref) / abs(ref)

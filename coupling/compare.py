@@ -8,10 +8,10 @@ command with the same --out: the engines' finished runs are kept, a stopped one 
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 
 from .case import ENGINES, load_case, refuse_ineffective
+from .checks import relative_difference
 from .params import CaseError, parse_set
 from .output import as_json, write_json
 from .run import execute, resume, study_dir
@@ -100,15 +100,11 @@ def continues(engines: list[str]):
 
 def max_rel_diff(values: dict, first: str) -> float | None:
     """The largest |v - v_first| / |v_first| over the engines' values {engine: value}; None where
-    no such number says it: a value missing or not finite, or v_first = 0 beside another value
-    (0 when all are 0). It read 0 whenever the first engine's value was 0, and nan into the JSON."""
-    vals = list(values.values())
-    if not all(isinstance(v, (int, float)) and math.isfinite(v) for v in vals):
-        return None
-    ref = values[first]
-    if ref == 0:
-        return 0.0 if all(v == 0 for v in vals) else None
-    return max(abs(v - ref) / abs(ref) for v in vals)
+    no such number says it (checks.relative_difference: a value not reached, or v_first = 0
+    beside another value). It read 0 whenever the first engine's value was 0, and nan into the
+    JSON."""
+    d = [relative_difference(v, values[first]) for v in values.values()]
+    return None if any(isinstance(x, str) for x in d) else max(d)
 
 
 def cli(args) -> int:
