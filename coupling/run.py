@@ -263,7 +263,7 @@ def resume(run_dir: Path, quiet: bool) -> tuple[int, Path, dict]:
             raise CaseError(f"{where}: this run finished ({status}); allowed: the directory of a stopped run "
                             "(killed, or ended with an error and kept its checkpoint)")
         if (final / "run.json").is_file():  # (before anything moves)
-            _same_case_file(_read_json(final / "run.json", where), where)
+            _same_inputs(_read_json(final / "run.json", where), where)
         # ended with an error (e.g. its engine worker was killed): back to .partial, continue
         try:
             os.replace(final, partial)
@@ -284,14 +284,14 @@ def resume(run_dir: Path, quiet: bool) -> tuple[int, Path, dict]:
     if bad:
         raise CaseError(f"{where}: run.json is corrupt ({bad[0]} missing or of the wrong type); "
                         "allowed: the run.json the run wrote")
-    _same_case_file(info, where)
+    _same_inputs(info, where)
     case = load_case(info["case_file"], info["parameters"])
     # stopped before its first checkpoint (or a procedure that has none): run it again from
     # the start, in its own directory; the result is the uninterrupted run's
     return execute(case, info["mode"], info["dem"], final, quiet, resume_from=ck_dir, restart=ck_dir is None)
 
 
-def _same_case_file(info: dict, where: str) -> None:
+def _same_inputs(info: dict, where: str) -> None:
     """CaseError unless the run's input files (its case file, a mesh, a load curve) are as they
     were when the run started: run.json keeps its parameters, not its tables (probes, checks, its
     duration) nor the files' contents, so an edited file resumed as a mix of the two (a probe

@@ -357,13 +357,13 @@ def test_a_run_whose_load_file_changed_is_not_resumed(tmp_path):
     """The same for a file a parameter names (a load curve): its contents were not in run.json."""
     from coupling.case import input_digests
     from coupling.params import CaseError
-    from coupling.run import _same_case_file
+    from coupling.run import _same_inputs
     case, curve = tmp_path / "c.toml", tmp_path / "load.csv"
     case.write_text("# a case\n")
     curve.write_text("0,0\n1,1\n")
     params = {"loads.press.file": str(curve)}
     info = {"case_file": str(case), "parameters": params, "inputs": input_digests(case, params)}
-    _same_case_file(info, "--resume X")  # unchanged: taken
+    _same_inputs(info, "--resume X")  # unchanged: taken
     curve.write_text("0,0\n1,10\n")
     with pytest.raises(CaseError, match=r"its input .*load.csv \(loads.press.file\) changed since the run started"):
-        _same_case_file(info, "--resume X")
+        _same_inputs(info, "--resume X")
