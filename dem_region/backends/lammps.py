@@ -103,7 +103,8 @@ class LammpsBackend(VerletArrays):
             neighbor {0.2 * scene.radius.min():.17g} bin
             neigh_modify delay 0 every 1 check yes
             special_bonds lj 0 1 1
-        """)
+            thermo_style custom step
+        """)  # (each step is a ``run 1``: thermo's default columns cost 32 -> 13 us a step, 168 atoms)
         if scene.contact == "hertz_mindlin":
             self._hertz_mindlin(mats, mu)
         else:

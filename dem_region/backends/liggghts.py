@@ -119,6 +119,9 @@ class LiggghtsBackend(VerletArrays):
             pair_style gran model hertz tangential history
             pair_coeff * *
         """)
+        # each step is a ``run 1``, whose thermo lines went to the log: 313 bytes and a kinetic
+        # energy and volume computed per step. The step alone: about 24 -> 17 us (168 atoms)
+        self._cmd("thermo_style custom step")
         if len(scene.bonds):
             self._cmd("bond_style harmonic\nneigh_modify exclude molecule all")
             for t, (kn, length) in enumerate(types):
