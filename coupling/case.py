@@ -64,6 +64,8 @@ def bundled_cases() -> dict[str, Path]:
 
 
 def find_case(name_or_path: str) -> Path:
+    if not name_or_path.strip():  # (Path('') is the working directory)
+        raise CaseError(f"CASE = {name_or_path!r}: empty; allowed: a bundled case name or a .toml path")
     p = Path(name_or_path)
     if p.suffix == ".toml" or p.exists() or "/" in name_or_path:
         if p.is_dir():

@@ -228,6 +228,9 @@ def test_case_files_with_a_byte_order_mark_are_read(femdem, tmp_path, encoding):
 
 @pytest.mark.parametrize("args, words", [
     (["run", "{tmp}"], ["is a directory"]),
+    (["params", ""], ["CASE = ''", "empty"]),
+    (["params", " "], ["CASE = ' '", "empty"]),
+    (["bench", "", "--sweep", "clock.substeps=1,2"], ["CASE = ''", "empty"]),
     (["run", "{tmp}/missing.toml"], ["no such case file"]),
     (["run", "bar_wave", "--set", "=3"], ["key=value"]),
     (["run", "bar_wave", "--set", "clock.safety="], ["key=value"]),
