@@ -51,7 +51,11 @@ class Param:
         if self.kind == "table":
             return "a list of at least two [time, value] rows, times increasing"
         what = {"float": "a number", "int": "an integer", "str": "a string"}[self.kind]
-        return what + (" " + " and ".join(parts) if parts else "") + (f" [{self.unit}]" if self.unit else "")
+        text = what + (" " + " and ".join(parts) if parts else "") + (f" [{self.unit}]" if self.unit else "")
+        if self.plausible and ((self.low is None or self.low < self.plausible[0])
+                               or (self.high is None or self.high > self.plausible[1])):  # (coerce refuses a unit slip)
+            text += f" (in SI: {self.plausible[0]:g} to {self.plausible[1]:g})"
+        return text
 
     def coerce(self, key: str, value: Any, typed: bool = False) -> Any:
         """Return the value in this parameter's type, or raise CaseError.

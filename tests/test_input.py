@@ -406,6 +406,31 @@ def test_params_lists_every_key_with_its_range_and_round_trips(capsys):
     assert main(["params", "no_such_case"]) == 2
 
 
+def test_params_names_the_unit_slip_bounds_it_refuses():
+    """Where a key refuses values inside its printed bounds as unit slips (a modulus of 1e5 Pa
+    is > 0 but not SI), `femdem params` and the error say so: every value the text allows,
+    coerce takes (checked at both ends of the SI band and just outside it)."""
+    from coupling.case import COMMON, bundled_cases, load_case
+    from coupling.params import CaseError
+    seen = 0
+    for name in bundled_cases():
+        case = load_case(name)
+        for key, param in {**COMMON, **case.scene.PARAMETERS}.items():
+            if not param.plausible or param.kind != "float":
+                continue
+            lo, hi = param.plausible
+            text = param.allowed()
+            narrower = (param.low is None or param.low < lo) or (param.high is None or param.high > hi)
+            assert (f"{lo:g} to {hi:g}" in text) == narrower, (name, key, text)
+            if narrower:
+                seen += 1
+                assert param.coerce(key, max(lo, param.low or lo)) is not None
+                for slip in [2.0 * hi] + ([0.5 * lo] if lo > 0 else []):
+                    with pytest.raises(CaseError):
+                        param.coerce(key, slip)
+    assert seen  # (the moduli and densities of the scene modules)
+
+
 def test_a_bench_s_reference_takes_the_compared_runs_zone_settings():
     """--set applies to a bench's runs and its reference alike: a growing zone's keys are the
     coupled runs', and the all-DEM or all-FEM reference takes them without effect (a run of
