@@ -15,7 +15,10 @@ over its own. A cached reference ran at another hour (this VM's speed moves by a
 to hour); with ``--repeat N`` the bench runs the reference again in each of N rounds, each
 round the reference then every point, and reports the medians: each run's wall time, and each
 point's speedup as the median of its rounds' ratios (a drift of the machine between rounds
-then cancels within each ratio).
+then cancels within each ratio). A run's wall time here is its ``timing_s.total`` less its
+kernels' compilation (``timing_s.compile``: a first run on a new machine, or of a build no run
+used before, compiles what later runs load from the cache; physics/compile_clock.py); each run's
+compile seconds are kept beside its wall time.
 """
 from __future__ import annotations
 
@@ -176,17 +179,18 @@ def bench(case_name: str, sweep: dict[str, list[str]], base: dict, ref_mode: str
             name = f"{engine}_{name}" if len(engines) > 1 else name
             runs[k].append(execute(load_case(case_name, {**base, **dict(zip(keys, combo))}), mode, engine,
                                    out / f"{name}{tag}", quiet=True)[2])
-    ref_walls = [ref["timing_s"]["total"] for ref in refs]
+    ref_walls = [_wall(ref) for ref in refs]
     points = []
     for (engine, combo), mine in zip(combos, runs):
         s = mine[0]  # (the qoi of the first round; the others' are the same when the runs repeat)
         names = qoi or compared_qoi(load_case(case_name, {**base, **dict(zip(keys, combo))}).parameters, s["qoi"],
                                     refs[0]["qoi"])
         errors, not_compared, one_sided = relative_errors(names, s["qoi"], refs[0]["qoi"])
-        walls = [run["timing_s"]["total"] for run in mine]
+        walls = [_wall(run) for run in mine]
         status = next((run["status"] for run in mine if run["status"] != "ok"), "ok")
         points.append({"setting": dict(zip(keys, combo)), "dem": engine, "status": status,
                        "wall_s": statistics.median(walls), "wall_s_runs": walls,
+                       "compile_s_runs": [run["timing_s"].get("compile", 0.0) for run in mine],
                        "speedup": statistics.median(w_ref / w for w_ref, w in zip(ref_walls, walls)),
                        "repeatable": all(_same_qoi(run["qoi"], s["qoi"]) for run in mine),
                        "timing_s": s["timing_s"], "qoi": s["qoi"], "rel_error": errors,
@@ -198,10 +202,17 @@ def bench(case_name: str, sweep: dict[str, list[str]], base: dict, ref_mode: str
         ok[i]["pareto"] = True
     result = {"case": case_name, "mode": mode, "dem": dem, "repeat": repeat,
               "reference": {"mode": ref_mode, "set": ref_set, "cached": cached, "wall_s": statistics.median(ref_walls),
-                            "wall_s_runs": ref_walls, "qoi": refs[0]["qoi"]}, "points": points}
+                            "wall_s_runs": ref_walls, "compile_s_runs": [ref["timing_s"].get("compile", 0.0) for ref in refs],
+                            "qoi": refs[0]["qoi"]}, "points": points}
     write_json(out / "speed_error.json", result)
     _plot(result, out / "speed_error.png")
     return result
+
+
+def _wall(summary: dict) -> float:
+    """s, a run's wall time without its kernels' compilation (a cached run of an older version
+    has no compile entry: its total)."""
+    return summary["timing_s"]["total"] - summary["timing_s"].get("compile", 0.0)
 
 
 def _same_qoi(a: dict, b: dict) -> bool:
@@ -263,6 +274,9 @@ def cli(args) -> int:
               f"{' (median)' if n > 1 else ''}, {p['speedup']:.2f} x the reference's speed, max rel. error {err}"
               f"{'  (Pareto)' if p.get('pareto') else ''}"
               f"{'' if p['repeatable'] else '  (its qoi differ between rounds: not repeatable)'}")
+    compiled = sum(ref["compile_s_runs"]) + sum(sum(p["compile_s_runs"]) for p in r["points"])
+    if compiled > 0.05:
+        print(f"  (kernels compiled in these runs: {compiled:.1f} s in all, left out of the wall times)")
     print(f"  results: {out}/speed_error.json\n  plot:    {out}/speed_error.png")
     return 0
 

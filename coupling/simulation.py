@@ -325,7 +325,7 @@ def _corrected(timing: dict, sim: Simulation) -> dict:
         timing[row["timer"]] += row["s"]
     if sim.timing_correction:
         for k, v in sim.timing_correction().items():
-            timing[k] += v
+            timing[k] = timing.get(k, 0.0) + v  # (and "compile": a worker's, apart from the buckets)
     return timing
 
 

@@ -13,6 +13,8 @@ import types
 
 from numba import njit
 
+from . import compile_clock  # noqa: F401 (counts this process's compilations from here on)
+
 
 def kernel(fn=None, **options):
     """``@kernel`` or ``kernel(parallel=True)(fn)``: njit with the project's options."""

@@ -352,6 +352,10 @@ class RemoteBackend:
         """The seconds of the worker's advances besides the engine's own, by timing bucket."""
         return {"models": self.models_s, "interface": self.interface_s, "transport": self.transport_s}
 
+    def compile_seconds(self) -> float:
+        """s the worker process has spent compiling kernels (physics/compile_clock.py)."""
+        return float(self._call("compile_seconds")[1])
+
     def reset_worker_seconds(self) -> None:
         """Start the books (after the start's set-up)."""
         self.models_s = self.interface_s = self.transport_s = 0.0
