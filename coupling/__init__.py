@@ -49,4 +49,5 @@ for _var, _sub in (("NUMBA_CACHE_DIR", "numba"), ("MPLCONFIGDIR", "matplotlib"))
 # a kernel's callee: physics/kernel_cache.py)
 from physics.kernel_cache import cache_dir as _kernel_cache  # noqa: E402 (standard library only)
 
-os.environ["NUMBA_CACHE_DIR"] = str(_kernel_cache(os.environ["NUMBA_CACHE_DIR"]))
+_base = Path(os.environ["NUMBA_CACHE_DIR"])
+os.environ["NUMBA_CACHE_DIR"] = str(_kernel_cache(_base, own=CACHE / "numba" in (_base, _base.parent)))

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import re
 import shutil
 import time
 from pathlib import Path
@@ -24,6 +25,11 @@ PACKAGES = ("physics", "fem_region", "dem_region", "interfaces", "coupling")
 MARKERS = (b"compiled import kernel", b"@njit", b"njit(")
 PREFIX = "kernels-"
 UNUSED_DAYS = 14  # another version's directory, untouched this long, is removed
+# numba's own directories, one per package directory and checkout (name_<sha1 of its path>), that
+# versions before these digests wrote straight into the project's cache (~150 MB on a developer's
+# machine); removed from the project's own cache directory only, once unused as long
+LEGACY = re.compile(r"(physics|fem_region|dem_region|interfaces|coupling|elements|backends|study|scenes|participants)"
+                    r"_[0-9a-f]{40}")
 
 
 def sources_digest(root: Path = ROOT) -> str:
@@ -38,10 +44,11 @@ def sources_digest(root: Path = ROOT) -> str:
     return h.hexdigest()[:16]
 
 
-def cache_dir(base: str | os.PathLike, root: Path = ROOT) -> Path:
+def cache_dir(base: str | os.PathLike, root: Path = ROOT, own: bool = False) -> Path:
     """``base`` / kernels-<digest of the sources>, created and marked as used now. A ``base``
     that is itself such a directory (inherited by a child process) is taken as its parent.
-    Other versions' directories not used for UNUSED_DAYS days are removed."""
+    Other versions' directories not used for UNUSED_DAYS days are removed; with ``own`` (the
+    project's default directory, not one a user named) the old layout's directories too."""
     base = Path(base)
     if base.name.startswith(PREFIX):
         base = base.parent
@@ -49,7 +56,8 @@ def cache_dir(base: str | os.PathLike, root: Path = ROOT) -> Path:
     mine.mkdir(parents=True, exist_ok=True)
     os.utime(mine)
     old = time.time() - UNUSED_DAYS * 86400
-    for d in base.glob(f"{PREFIX}*"):
+    stale = [d for d in base.iterdir() if d.name.startswith(PREFIX) or (own and LEGACY.fullmatch(d.name))]
+    for d in stale:
         try:
             if d != mine and d.is_dir() and d.stat().st_mtime < old:
                 shutil.rmtree(d, ignore_errors=True)

@@ -64,3 +64,24 @@ def test_the_cache_directory_is_inherited_and_old_versions_go(tmp_path):
     os.utime(old, (then, then))
     cache_dir(base, tmp_path)
     assert not old.exists() and recent.exists() and mine.exists()
+
+
+def test_the_old_layout_goes_from_the_project_s_own_directory_only(tmp_path):
+    """Before the digests, numba wrote its per-package directories (name_<sha1>) straight into
+    the project's cache: removed there once unused for UNUSED_DAYS days; in a directory the
+    user named (own=False) nothing but the digests' directories is touched."""
+    _tree(tmp_path, 2.0)
+    then = time.time() - (UNUSED_DAYS + 1) * 86400
+    for own in (True, False):
+        base = tmp_path / f"numba-{own}"
+        legacy = [base / f"{p}_{'ab' * 20}" for p in ("physics", "fem_region", "dem_region")]
+        kept = [base / f"physics_{'ab' * 20}_x", base / "someone_elses", base / f"numpy_{'ab' * 20}"]
+        recent = base / f"interfaces_{'cd' * 20}"
+        for d in legacy + kept + [recent]:
+            d.mkdir(parents=True)
+            (d / "k.nbi").write_text("")
+            if d is not recent:
+                os.utime(d, (then, then))
+        cache_dir(base, tmp_path, own=own)
+        assert all(d.exists() != own for d in legacy)
+        assert all(d.exists() for d in kept + [recent])

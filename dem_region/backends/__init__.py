@@ -63,7 +63,7 @@ def lammps_env() -> dict:
     # its numba is another version than the orchestrator's: compiled kernels cached apart (two
     # versions sharing __pycache__ would recompile each other's kernels at every start)
     base = env.get("FEMDEM_CACHE_DIR") or Path(env.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "femdem"
-    env["NUMBA_CACHE_DIR"] = str(cache_dir(Path(base) / "numba-lammps"))
+    env["NUMBA_CACHE_DIR"] = str(cache_dir(Path(base) / "numba-lammps", own=True))
     return env
 
 
