@@ -35,7 +35,7 @@ from .case import Case, input_digests, load_case
 from .checks import relative_difference
 from .params import CaseError, parse_set
 from .output import write_json
-from .run import execute
+from .run import execute, wall_s
 
 
 def _cache_dir() -> Path:
@@ -179,14 +179,14 @@ def bench(case_name: str, sweep: dict[str, list[str]], base: dict, ref_mode: str
             name = f"{engine}_{name}" if len(engines) > 1 else name
             runs[k].append(execute(load_case(case_name, {**base, **dict(zip(keys, combo))}), mode, engine,
                                    out / f"{name}{tag}", quiet=True)[2])
-    ref_walls = [_wall(ref) for ref in refs]
+    ref_walls = [wall_s(ref) for ref in refs]
     points = []
     for (engine, combo), mine in zip(combos, runs):
         s = mine[0]  # (the qoi of the first round; the others' are the same when the runs repeat)
         names = qoi or compared_qoi(load_case(case_name, {**base, **dict(zip(keys, combo))}).parameters, s["qoi"],
                                     refs[0]["qoi"])
         errors, not_compared, one_sided = relative_errors(names, s["qoi"], refs[0]["qoi"])
-        walls = [_wall(run) for run in mine]
+        walls = [wall_s(run) for run in mine]
         status = next((run["status"] for run in mine if run["status"] != "ok"), "ok")
         points.append({"setting": dict(zip(keys, combo)), "dem": engine, "status": status,
                        "wall_s": statistics.median(walls), "wall_s_runs": walls,
@@ -207,12 +207,6 @@ def bench(case_name: str, sweep: dict[str, list[str]], base: dict, ref_mode: str
     write_json(out / "speed_error.json", result)
     _plot(result, out / "speed_error.png")
     return result
-
-
-def _wall(summary: dict) -> float:
-    """s, a run's wall time without its kernels' compilation (a cached run of an older version
-    has no compile entry: its total)."""
-    return summary["timing_s"]["total"] - summary["timing_s"].get("compile", 0.0)
 
 
 def _same_qoi(a: dict, b: dict) -> bool:
