@@ -1,6 +1,8 @@
 """Compiled loops of the engine adapters."""
 from __future__ import annotations
 
+import numpy as np
+
 from physics.compiled import kernel
 
 
@@ -34,3 +36,16 @@ def put_components(V, rows, comps, src, v):
     components a plan selected (rows (m,) engine rows, src (m,) rows of v (k, 3))."""
     for e in range(rows.shape[0]):
         V[rows[e], comps[e]] = v[src[e], comps[e]]
+
+
+@kernel
+def spring_energy(X, bonds, K, r0):
+    """J, sum over bonds (b, 2) of K (|x_j - x_i| - r0)^2 (K (b,) N/m: the engine's harmonic
+    bond coefficient, half the spring's stiffness; r0 (b,) m) at positions X (n, 3) m, without
+    temporaries (at every sample; an all-DEM beam's 9,534 placeholder springs took 0.7 ms in numpy)."""
+    e = 0.0
+    for b in range(bonds.shape[0]):
+        i, j = bonds[b, 0], bonds[b, 1]
+        r = np.sqrt((X[j, 0] - X[i, 0]) ** 2 + (X[j, 1] - X[i, 1]) ** 2 + (X[j, 2] - X[i, 2]) ** 2)
+        e += K[b] * (r - r0[b]) ** 2
+    return e

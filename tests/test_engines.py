@@ -464,3 +464,18 @@ def test_a_continued_engine_starts_where_its_ledger_left_off(engine, F, v0, step
     new.finalize()
     # (a half kick dt/2 F/m is 0.03-0.3 m/s here: without it the reading is off by far more than 1e-12)
     assert new_read[0] == pytest.approx(old_read[-1], rel=1e-12, abs=1e-18)
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.integers(1, 300))
+def test_the_engines_spring_energy_is_the_harmonic_sum(seed, nb):
+    """LIGGGHTS' and LAMMPS' bond energy at each sample (dem_region.kernels.spring_energy):
+    sum of K (r - r0)^2, the engines' harmonic bond, to round-off of numpy's definition."""
+    from dem_region.kernels import spring_energy
+    rng = np.random.default_rng(seed)
+    X = rng.normal(size=(50, 3))
+    bonds = rng.integers(0, 50, size=(nb, 2))
+    K, r0 = rng.uniform(1e-9, 1e3, nb), rng.uniform(0.0, 2.0, nb)
+    r = np.linalg.norm(X[bonds[:, 1]] - X[bonds[:, 0]], axis=1)
+    terms = K * (r - r0) ** 2
+    assert spring_energy(X, bonds, K, r0) == pytest.approx(terms.sum(), rel=1e-12, abs=1e-12 * np.abs(terms).sum())

@@ -32,7 +32,7 @@ import os
 
 import numpy as np
 
-from ..kernels import add_held_forces, gather_forces, put_components
+from ..kernels import add_held_forces, gather_forces, put_components, spring_energy
 
 
 class VerletArrays:
@@ -409,11 +409,9 @@ class VerletArrays:
         """J, harmonic bonds K (r - r0)^2 and the brittle bonds carried here."""
         if not len(self.scene.bonds):
             return 0.0
-        if getattr(self, "_stiff", None) is None:  # the law bonds' placeholders (K = 0) hold nothing: skipped
-            self._stiff = np.flatnonzero(self._bond_K != 0.0)  # (an all-DEM beam: 9,198 of them, at every sample)
-        i, j = self.scene.bonds[self._stiff].T
-        r = np.linalg.norm(self.X[i] - self.X[j], axis=1)
-        return float(np.sum(self._bond_K[self._stiff] * (r - self._bond_r0[self._stiff]) ** 2)) + self._brittle_energy()
+        if getattr(self, "_bond_rows", None) is None:
+            self._bond_rows = np.ascontiguousarray(self.scene.bonds, np.int64)
+        return spring_energy(self.X, self._bond_rows, self._bond_K, self._bond_r0) + self._brittle_energy()
 
 
 def _significant(a: np.ndarray, digits: int) -> np.ndarray:
