@@ -47,7 +47,8 @@ for _var, _sub in (("NUMBA_CACHE_DIR", "numba"), ("MPLCONFIGDIR", "matplotlib"))
     os.environ.setdefault(_var, str(CACHE / _sub))
 # in it, a directory per version of the kernels' sources (numba's own check misses a change in
 # a kernel's callee: physics/kernel_cache.py)
-from physics.kernel_cache import cache_dir as _kernel_cache  # noqa: E402 (standard library only)
+from physics.kernel_cache import PREFIX as _PREFIX, cache_dir as _kernel_cache  # noqa: E402 (standard library only)
 
 _base = Path(os.environ["NUMBA_CACHE_DIR"])
-os.environ["NUMBA_CACHE_DIR"] = str(_kernel_cache(_base, own=CACHE / "numba" in (_base, _base.parent)))
+_own = (_base.parent if _base.name.startswith(_PREFIX) else _base) == CACHE / "numba"  # (not one a user named)
+os.environ["NUMBA_CACHE_DIR"] = str(_kernel_cache(_base, own=_own))

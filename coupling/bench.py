@@ -268,7 +268,7 @@ def cli(args) -> int:
               f"{' (median)' if n > 1 else ''}, {p['speedup']:.2f} x the reference's speed, max rel. error {err}"
               f"{'  (Pareto)' if p.get('pareto') else ''}"
               f"{'' if p['repeatable'] else '  (its qoi differ between rounds: not repeatable)'}")
-    compiled = sum(ref["compile_s_runs"]) + sum(sum(p["compile_s_runs"]) for p in r["points"])
+    compiled = (0.0 if ref["cached"] else sum(ref["compile_s_runs"])) + sum(sum(p["compile_s_runs"]) for p in r["points"])
     if compiled > 0.05:
         print(f"  (kernels compiled in these runs: {compiled:.1f} s in all, left out of the wall times)")
     print(f"  results: {out}/speed_error.json\n  plot:    {out}/speed_error.png")

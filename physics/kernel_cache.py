@@ -56,7 +56,10 @@ def cache_dir(base: str | os.PathLike, root: Path = ROOT, own: bool = False) -> 
     mine.mkdir(parents=True, exist_ok=True)
     os.utime(mine)
     old = time.time() - UNUSED_DAYS * 86400
-    stale = [d for d in base.iterdir() if d.name.startswith(PREFIX) or (own and LEGACY.fullmatch(d.name))]
+    try:
+        stale = [d for d in base.iterdir() if d.name.startswith(PREFIX) or (own and LEGACY.fullmatch(d.name))]
+    except OSError:  # (a directory one may write but not list: nothing is pruned)
+        stale = []
     for d in stale:
         try:
             if d != mine and d.is_dir() and d.stat().st_mtime < old:

@@ -63,3 +63,33 @@ def test_an_engine_worker_s_compilation_is_reported(femdem, monkeypatch, tmp_pat
         assert code == 0, err
         seconds.append(s["timing_s"]["compile"])
     assert seconds[0] > 1.0 and seconds[1] < 0.1 * seconds[0], seconds
+
+
+@pytest.mark.parametrize("conversion", ["rebuild", "release"])
+def test_a_zone_grown_on_an_engine_worker_books_its_compile_seconds(femdem, conversion):
+    """A rebuilt zone's old model is closed (its worker finalized) before the clock books its
+    time, and a released zone's models share one worker: the run still ends ok, its worker's
+    compile seconds read once (after finalize, from the reading kept) and within the total."""
+    from test_growth import GROW, _sets
+    code, s, err = femdem("run", "beam_impact_coarse", "--dem", "lammps",
+                          *_sets(dict(GROW, **{"clock.t_end": 9e-6, "zone.conversion": conversion})))
+    assert code == 0 and s["status"] == "ok", (err, s and s["message"])
+    assert s["qoi"]["zone_conversions"] >= 1
+    assert 0.0 <= s["timing_s"]["compile"] <= s["timing_s"]["total"]
+
+
+def test_a_worker_s_compile_seconds_are_booked_once():
+    """RemoteBackend.compile_seconds gives what the worker compiled since the last call, and
+    after finalize what its last reading added (the worker's own clock only grows)."""
+    from dem_region.backends.remote import RemoteBackend
+    readings = iter([5.0, 5.0, 7.5])
+
+    class Conn:
+        closed = False
+    be = object.__new__(RemoteBackend)
+    be.conn, be._compiled, be._compiled_booked = Conn(), 0.0, 0.0
+    be._call = lambda *msg: ("ok", next(readings))
+    assert [be.compile_seconds(), be.compile_seconds(), be.compile_seconds()] == [5.0, 0.0, 2.5]
+    be._compiled = 9.0  # finalize's last reading, then the connection closed
+    be.conn.closed = True
+    assert [be.compile_seconds(), be.compile_seconds()] == [1.5, 0.0]

@@ -55,6 +55,7 @@ class RemoteBackend:
         self._prewrite, self._steps_left = False, 0
         # an advance under way; the replies owed to queries sent; an advance that would not stop
         self._advancing, self._replies_owed, self._stuck = False, 0, False
+        self._compiled, self._compiled_booked = 0.0, 0.0  # s, the worker's compiling: read, booked
         self._dt = 0.0
         env = dict(env if env is not None else os.environ)
         env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
@@ -353,8 +354,14 @@ class RemoteBackend:
         return {"models": self.models_s, "interface": self.interface_s, "transport": self.transport_s}
 
     def compile_seconds(self) -> float:
-        """s the worker process has spent compiling kernels (physics/compile_clock.py)."""
-        return float(self._call("compile_seconds")[1])
+        """s the worker process has spent compiling kernels (physics/compile_clock.py) since
+        the last call: booked once where several models use this worker in turn (a zone whose
+        particles are released), and readable after ``finalize`` (a rebuilt zone's old model
+        is closed before its time is booked)."""
+        if not self.conn.closed:
+            self._compiled = float(self._call("compile_seconds")[1])
+        new, self._compiled_booked = self._compiled - self._compiled_booked, self._compiled
+        return new
 
     def reset_worker_seconds(self) -> None:
         """Start the books (after the start's set-up)."""
@@ -508,6 +515,11 @@ class RemoteBackend:
     def finalize(self) -> None:
         if self.proc.poll() is None and not self._stuck:
             try:  # a worker that does not answer in 10 s is killed below
+                if not self._advancing and not self._replies_owed:  # idle: its last compile reading, kept
+                    self._send(("compile_seconds",))
+                    reply = self._recv() if self.conn.poll(10.0) else ("late",)
+                    if reply[0] == "ok":
+                        self._compiled = float(reply[1])
                 self._send(("finalize",))
                 if self.conn.poll(10.0):
                     self._recv()
