@@ -299,6 +299,9 @@ class Growth:
         old_sim.sync() if old_sim.sync is not None else None
         before = old_sim.energies()
         transfer = _Transfer(old, old.clock.momentum_snapshot, self.symmetric, self.release)
+        if old_sim.timing_correction is not None:  # read now: a rebuild closes its worker, a release's
+            booked = old_sim.timing_correction()  # new clock resets the worker's books (run_clock books it after)
+            old_sim.timing_correction = lambda: booked
         if not self.release:  # the old engine closed first: YADE runs one scene per process
             old_sim.close()
         sim, built = self._assemble(half_width, transfer, error=RuntimeError)
