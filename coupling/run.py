@@ -63,8 +63,11 @@ def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool,
         if resume_from is None and not restart:
             writer_cleanup(writer)
         raise OutOfSpace(writer.final, exc, started=False) from None
-    from physics.compile_clock import compile_seconds  # (numba: imported where a run starts)
+    from physics.compile_clock import announce_once, compile_seconds  # (numba: imported where a run starts)
     t_start, compiled_before = time.perf_counter(), compile_seconds()
+    if not quiet and sys.stderr.isatty():  # (the progress bar's terminal: the compiling comes before it)
+        announce_once(lambda: print("femdem: compiling the kernels for this machine (once per version of the code: "
+                                    "up to a minute or so)", file=sys.stderr, flush=True))
     os.environ["FEMDEM_SCRATCH_DIR"] = str(writer.dir / SCRATCH)  # engines' files stay in the run
     sim, result, qoi, checks, printed = None, None, {}, {}, 0
     status, message = "ok", ""
@@ -132,6 +135,7 @@ def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool,
         exc.run_dir = writer.dir
         raise
     finally:
+        announce_once(None)
         if sim is not None:
             sim.close()
             for line in sim.warnings[printed:]:  # (a growing zone's, the far field's left-out damage)

@@ -21,9 +21,13 @@ from numba.core import event
 class _Clock(event.Listener):
     def __init__(self):
         self.seconds, self._depth, self._t0 = 0.0, 0, 0.0
+        self.announce = None  # called before the next compilation, once
 
     def on_start(self, ev) -> None:
         if self._depth == 0:
+            if self.announce is not None:
+                say, self.announce = self.announce, None
+                say()
             self._t0 = time.perf_counter()
         self._depth += 1
 
@@ -40,3 +44,9 @@ event.register("numba:compile", _CLOCK)
 def compile_seconds() -> float:
     """s: this process's kernel compilations so far (outermost, wall time)."""
     return _CLOCK.seconds
+
+
+def announce_once(say) -> None:
+    """``say()`` before this process's next compilation (once; None: nothing). An interactive
+    run says why its first minute on a new machine shows nothing else (coupling/run.py)."""
+    _CLOCK.announce = say

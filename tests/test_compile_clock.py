@@ -93,3 +93,32 @@ def test_a_worker_s_compile_seconds_are_booked_once():
     be._compiled = 9.0  # finalize's last reading, then the connection closed
     be.conn.closed = True
     assert [be.compile_seconds(), be.compile_seconds()] == [1.5, 0.0]
+
+
+def test_an_interactive_run_says_once_that_it_compiles():
+    """The announcement runs before the next compilation only, once for a kernel and its
+    callee, and not again for later ones."""
+    from physics.compile_clock import announce_once
+    said = []
+    announce_once(lambda: said.append(1))
+    a = np.linspace(0.0, 1.0, 8)
+    _fresh_kernels(time.time())(a)
+    _fresh_kernels(time.time() + 1.0)(a)
+    assert said == [1]
+
+
+def test_execute_announces_compiling_only_on_a_terminal_without_quiet(monkeypatch, tmp_path, capsys):
+    """Set for an interactive run (a terminal, not --quiet), cleared at its end; a quiet or
+    piped run sets nothing."""
+    import sys
+
+    from coupling.case import load_case
+    from coupling.run import execute
+    from physics import compile_clock
+    seen = []
+    monkeypatch.setattr(compile_clock, "announce_once", lambda say: seen.append(say is not None))
+    for k, (tty, quiet) in enumerate([(False, False), (True, True), (True, False)]):
+        monkeypatch.setattr(sys.stderr, "isatty", lambda: tty, raising=False)
+        code, _, s = execute(load_case("chain_consistency"), "fem", "liggghts", tmp_path / f"r{k}", quiet)
+        assert code == 0 and s["status"] == "ok", s["message"]
+    assert seen == [False, False, True, False]  # (each run's end clears it)
