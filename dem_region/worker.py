@@ -294,9 +294,9 @@ def serve(conn: Connection | None, engine: str, comm=None) -> None:
             elif op == "law_shares":  # bonds each rank evaluates (several ranks; collective)
                 shares = state["ranks"].shares() if state["ranks"] is not None else []
                 conn.send(("ok", comm.allgather(shares) if comm is not None else [shares]))
-            elif op == "compile_seconds":
+            elif op == "compile_seconds":  # (several ranks compile side by side: the longest)
                 from physics.compile_clock import compile_seconds
-                conn.send(("ok", compile_seconds()))
+                conn.send(("ok", max(comm.allgather(compile_seconds())) if comm is not None else compile_seconds()))
             elif op == "models_flush":  # the orchestrator queries the engine after the models wrote
                 backend.add_forces(state["model_ids"], state["F_model"])
                 state["F_model"][:] = 0.0

@@ -45,8 +45,8 @@ def test_a_compilation_is_counted_once_with_its_callees_inside():
 def test_a_run_reports_its_compile_seconds_within_its_total(femdem):
     """In process and with an engine's worker: a number within the total (the suite's kernels
     are cached, so most runs compile little; the bench's own test covers its use)."""
-    for engine in ("liggghts", "lammps"):
-        code, s, err = femdem("run", "coupled_free_flight", "--dem", engine)
+    for engine, ranks in (("liggghts", 1), ("lammps", 1), ("lammps", 2)):  # (two ranks: the longest)
+        code, s, err = femdem("run", "coupled_free_flight", "--dem", engine, "--set", f"dem.ranks={ranks}")
         assert code == 0, err
         t = s["timing_s"]
         assert 0.0 <= t["compile"] <= t["total"], t
