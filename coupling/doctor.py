@@ -6,6 +6,7 @@ see ENGINES.md) cannot take the orchestrator down, and LAMMPS is probed in its o
 from __future__ import annotations
 
 import json
+import os
 import shutil
 import subprocess
 import sys
@@ -69,6 +70,17 @@ def _mpi(cmd: list[str]) -> tuple[bool, str]:
     return r.returncode == 0, first[0] if first else ""
 
 
+def kernels() -> dict:
+    """{process: {dir, cached}}: the compiled kernels cached for this version of the code
+    (physics/kernel_cache.py), the orchestrator's and the LAMMPS worker's; none cached: the next
+    run compiles them (up to a minute) and says so."""
+    out = {}
+    for who, env in (("orchestrator", os.environ), ("lammps worker", lammps_env())):
+        d = Path(env["NUMBA_CACHE_DIR"])
+        out[who] = {"dir": str(d), "cached": sum(1 for _ in d.rglob("*.nbi")) if d.is_dir() else 0}
+    return out
+
+
 def report() -> dict:
     yade_ok, yade_v = _probe("/usr/bin/python3", _YADE)
     lig_ok, lig_v = _probe(sys.executable, _LIGGGHTS)
@@ -87,7 +99,8 @@ def report() -> dict:
     }
     mpi = {"openmpi": {"ok": ompi_ok, "version": ompi_v, "used_by": "yade, liggghts, mpi4py"},
            "mpich": {"ok": mpich_ok, "version": mpich_v, "used_by": "lammps worker"}}
-    return {"engines": engines, "mpi": mpi, "python": sys.version.split()[0], "executable": sys.executable}
+    return {"engines": engines, "mpi": mpi, "kernels": kernels(), "python": sys.version.split()[0],
+            "executable": sys.executable}
 
 
 def doctor(as_json: bool = False) -> int:
@@ -100,4 +113,8 @@ def doctor(as_json: bool = False) -> int:
             print(f"{name:9s} {state}  [{e['process']}]")
         for name, m in r["mpi"].items():
             print(f"{name:9s} {'ok   ' + m['version'] if m['ok'] else 'missing'}  [{m['used_by']}]")
+        for who, k in r["kernels"].items():
+            state = (f"{k['cached']} compiled for this version" if k["cached"] else
+                     "none compiled for this version yet: the next run compiles them (up to a minute)")
+            print(f"{'kernels':9s} {state}  [{who}: {k['dir']}]")
     return 0 if all(e["loads"] for e in r["engines"].values()) else 1

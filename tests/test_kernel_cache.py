@@ -85,3 +85,23 @@ def test_the_old_layout_goes_from_the_project_s_own_directory_only(tmp_path):
         cache_dir(base, tmp_path, own=own)
         assert all(d.exists() != own for d in legacy)
         assert all(d.exists() for d in kept + [recent])
+
+
+def test_doctor_says_whether_this_version_s_kernels_are_compiled(tmp_path, monkeypatch, capsys):
+    """`femdem doctor` counts the kernels cached for this version, the orchestrator's and the
+    LAMMPS worker's; with none it says the next run compiles them."""
+    from coupling import doctor
+    mine = tmp_path / "numba" / f"{PREFIX}{sources_digest()}"
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(mine))
+    monkeypatch.setenv("FEMDEM_CACHE_DIR", str(tmp_path))  # (the worker's: numba-lammps in it)
+    monkeypatch.setattr(doctor, "report", lambda: {"engines": {}, "mpi": {}, "kernels": doctor.kernels()})
+    doctor.doctor()
+    out = capsys.readouterr().out.splitlines()
+    assert len(out) == 2 and all("none compiled for this version yet" in line for line in out), out
+    for k in range(3):
+        (mine / f"physics_{k}").mkdir(parents=True)
+        (mine / f"physics_{k}" / f"kernels.f-{k}.py311.nbi").write_text("")
+    k = doctor.kernels()
+    assert k["orchestrator"] == {"dir": str(mine), "cached": 3} and k["lammps worker"]["cached"] == 0
+    doctor.doctor()
+    assert "3 compiled for this version" in capsys.readouterr().out
