@@ -35,7 +35,7 @@ from .case import Case, input_digests, load_case
 from .checks import relative_difference
 from .params import CaseError, parse_set
 from .output import write_json
-from .run import execute, wall_s
+from .run import compile_s, execute, wall_s
 
 
 def _cache_dir() -> Path:
@@ -190,7 +190,7 @@ def bench(case_name: str, sweep: dict[str, list[str]], base: dict, ref_mode: str
         status = next((run["status"] for run in mine if run["status"] != "ok"), "ok")
         points.append({"setting": dict(zip(keys, combo)), "dem": engine, "status": status,
                        "wall_s": statistics.median(walls), "wall_s_runs": walls,
-                       "compile_s_runs": [run["timing_s"].get("compile", 0.0) for run in mine],
+                       "compile_s_runs": [compile_s(run) for run in mine],
                        "speedup": statistics.median(w_ref / w for w_ref, w in zip(ref_walls, walls)),
                        "repeatable": all(_same_qoi(run["qoi"], s["qoi"]) for run in mine),
                        "timing_s": s["timing_s"], "qoi": s["qoi"], "rel_error": errors,
@@ -203,7 +203,7 @@ def bench(case_name: str, sweep: dict[str, list[str]], base: dict, ref_mode: str
     result = {"case": case_name, "mode": mode, "dem": dem, "repeat": repeat,
               "reference": {"mode": ref_mode, "set": ref_set, "cached": cached, "wall_s": statistics.median(ref_walls),
                             "wall_s_runs": ref_walls,
-                            "compile_s_runs": [ref["timing_s"].get("compile", 0.0) for ref in refs],
+                            "compile_s_runs": [compile_s(ref) for ref in refs],
                             "qoi": refs[0]["qoi"]}, "points": points}
     write_json(out / "speed_error.json", result)
     _plot(result, out / "speed_error.png")

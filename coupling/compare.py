@@ -15,7 +15,7 @@ from .case import ENGINES, load_case, refuse_ineffective
 from .checks import relative_difference
 from .params import CaseError, parse_set
 from .output import as_json, write_json
-from .run import execute, resume, study_dir, wall_s
+from .run import compile_s, execute, resume, study_dir, wall_s
 
 
 def plan(case_name: str, engines: list[str], sets: dict, mode: str | None) -> tuple:
@@ -56,7 +56,7 @@ def compare(case_name: str, engines: list[str], sets: dict, mode: str | None, ou
               "status": {e: runs[e]["status"] for e in engines},
               "checks_passed": {e: all(c["passed"] for c in runs[e]["checks"].values()) for e in engines},
               "wall_s": {e: wall_s(runs[e]) for e in engines},  # (without compiling kernels: a first run's)
-              "compile_s": {e: runs[e]["timing_s"].get("compile", 0.0) for e in engines},
+              "compile_s": {e: compile_s(runs[e]) for e in engines},
               "dem_s": {e: runs[e]["timing_s"].get("dem", 0.0) for e in engines}}
     write_json(out / "compare.json", result)
     return result

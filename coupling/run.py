@@ -36,11 +36,16 @@ def default_out(case: Case, mode: str, dem: str) -> Path:
     return Path("runs") / "-".join([case.name, mode, *([dem] if mode != "fem" else []), stamp])
 
 
+def compile_s(summary: dict) -> float:
+    """s, a run's kernel compilation (timing_s.compile: the cost of a first run on a machine, not
+    of the model; a summary of an older version has none: 0)."""
+    return summary["timing_s"].get("compile", 0.0)
+
+
 def wall_s(summary: dict) -> float:
-    """s, a run's wall time without its kernels' compilation (timing_s.compile: the cost of a
-    first run on a machine, not of the model; a summary of an older version has none): what
-    bench and compare put side by side."""
-    return summary["timing_s"]["total"] - summary["timing_s"].get("compile", 0.0)
+    """s, a run's wall time without its kernels' compilation: what bench and compare put side
+    by side."""
+    return summary["timing_s"]["total"] - compile_s(summary)
 
 
 def execute(case: Case, mode: str, dem: str, out: Path | None, quiet: bool,
