@@ -17,8 +17,11 @@ round the reference then every point, and reports the medians: each run's wall t
 point's speedup as the median of its rounds' ratios (a drift of the machine between rounds
 then cancels within each ratio). A run's wall time here is its ``timing_s.total`` less its
 kernels' compilation (``timing_s.compile``: a first run on a new machine, or of a build no run
-used before, compiles what later runs load from the cache; physics/compile_clock.py); each run's
-compile seconds are kept beside its wall time.
+used before, compiles what later runs load from the cache; physics/compile_clock.py) and less
+the drawing of its plots from its finished history (``timing_s.plots``: about a second for any
+model, half of it importing matplotlib; in a 5 s coupled run a fifth of the wall and a fortieth
+of the all-DEM one's, so it set the ratio more than the models did); each run's compile and plot
+seconds are kept beside its wall time.
 """
 from __future__ import annotations
 
@@ -35,7 +38,7 @@ from .case import Case, input_digests, load_case
 from .checks import relative_difference
 from .params import CaseError, parse_set
 from .output import write_json
-from .run import compile_s, execute, wall_s
+from .run import compile_s, execute, plots_s, wall_s
 
 
 def _cache_dir() -> Path:
@@ -191,6 +194,7 @@ def bench(case_name: str, sweep: dict[str, list[str]], base: dict, ref_mode: str
         points.append({"setting": dict(zip(keys, combo)), "dem": engine, "status": status,
                        "wall_s": statistics.median(walls), "wall_s_runs": walls,
                        "compile_s_runs": [compile_s(run) for run in mine],
+                       "plots_s_runs": [plots_s(run) for run in mine],
                        "speedup": statistics.median(w_ref / w for w_ref, w in zip(ref_walls, walls)),
                        "repeatable": all(_same_qoi(run["qoi"], s["qoi"]) for run in mine),
                        "timing_s": s["timing_s"], "qoi": s["qoi"], "rel_error": errors,
@@ -204,6 +208,7 @@ def bench(case_name: str, sweep: dict[str, list[str]], base: dict, ref_mode: str
               "reference": {"mode": ref_mode, "set": ref_set, "cached": cached, "wall_s": statistics.median(ref_walls),
                             "wall_s_runs": ref_walls,
                             "compile_s_runs": [compile_s(ref) for ref in refs],
+                            "plots_s_runs": [plots_s(ref) for ref in refs],
                             "qoi": refs[0]["qoi"]}, "points": points}
     write_json(out / "speed_error.json", result)
     _plot(result, out / "speed_error.png")
@@ -273,6 +278,10 @@ def cli(args) -> int:
     compiled += 0.0 if ref["cached"] else sum(ref["compile_s_runs"])  # (a cached one ran at another time)
     if compiled > 0.05:
         print(f"  (kernels compiled in these runs: {compiled:.1f} s in all, left out of the wall times)")
+    drawn = [s for p in r["points"] for s in p["plots_s_runs"]] + ([] if ref["cached"] else ref["plots_s_runs"])
+    if drawn:
+        print(f"  (each run's plots, drawn after its results: median {statistics.median(drawn):.2f} s, left out of "
+              "the wall times)")
     print(f"  results: {out}/speed_error.json\n  plot:    {out}/speed_error.png")
     return 0
 

@@ -2,7 +2,7 @@
 
 Writes compare.json and prints a table: every quantity of interest per engine, its largest
 relative difference from the first engine, the checks' verdicts and the wall time per engine
-(less any compiling of kernels, a first run's cost: coupling.run.wall_s).
+(less any compiling of kernels, a first run's cost, and the plots' drawing: coupling.run.wall_s).
 A comparison stopped half way (Ctrl-C, SIGTERM, a killed machine) is finished by the same
 command with the same --out: the engines' finished runs are kept, a stopped one resumed.
 """
@@ -55,7 +55,7 @@ def compare(case_name: str, engines: list[str], sets: dict, mode: str | None, ou
     result = {"case": case.name, "mode": mode, "engines": engines, "rows": rows,
               "status": {e: runs[e]["status"] for e in engines},
               "checks_passed": {e: all(c["passed"] for c in runs[e]["checks"].values()) for e in engines},
-              "wall_s": {e: wall_s(runs[e]) for e in engines},  # (without compiling kernels: a first run's)
+              "wall_s": {e: wall_s(runs[e]) for e in engines},  # (without compiling kernels, a first run's, and plots)
               "compile_s": {e: compile_s(runs[e]) for e in engines},
               "dem_s": {e: runs[e]["timing_s"].get("dem", 0.0) for e in engines}}
     write_json(out / "compare.json", result)

@@ -184,9 +184,43 @@ def test_a_bench_leaves_the_kernels_compilation_out_of_its_wall_times(monkeypatc
     assert p["speedup"] == pytest.approx(np.median([42.0 / 8.5, 43.0 / 8.3]))
 
 
+def test_a_bench_leaves_the_plots_drawing_out_of_its_wall_times(monkeypatch, tmp_path):
+    """Each run draws its plots from its finished history in about a second, whatever the model:
+    in a 5 s coupled run against a 40 s all-DEM one that second moved the ratio more than the
+    models did. The wall times are the totals less compile and plot seconds, both kept beside."""
+    runs = iter([(40.0, 0.0, 1.2), (5.0, 0.5, 1.0), (41.0, 0.0, 1.1), (5.2, 0.0, 0.9)])  # (total, compile, plots)
+
+    def execute(case, mode, dem, out, quiet=True):
+        total, compile_s, plots = next(runs)
+        return 0, None, {"qoi": {"peak_load": 1.0}, "timing_s": {"total": total, "compile": compile_s, "plots": plots},
+                         "status": "ok", "message": ""}
+
+    monkeypatch.setattr(bench, "execute", execute)
+    monkeypatch.setenv("FEMDEM_CACHE_DIR", str(tmp_path / "cache"))
+    r = bench.bench("chain_consistency", {"clock.substeps": ["2"]}, {}, "fem", {}, "liggghts", "coupled",
+                    tmp_path / "b", None, 2)
+    assert r["reference"]["wall_s_runs"] == [pytest.approx(38.8), pytest.approx(39.9)]
+    assert r["reference"]["plots_s_runs"] == [1.2, 1.1]
+    p = r["points"][0]
+    assert p["wall_s_runs"] == [pytest.approx(3.5), pytest.approx(4.3)] and p["plots_s_runs"] == [1.0, 0.9]
+    assert p["speedup"] == pytest.approx(np.median([38.8 / 3.5, 39.9 / 4.3]))
+
+
+def test_a_run_books_its_plots_within_its_io_and_total(femdem, tmp_path):
+    """timing_s.plots: the seconds drawing plots/*.png, inside the io bucket and the total; the
+    wall time bench and compare read is the total less it and the compile seconds."""
+    from coupling.run import wall_s
+    code, s, err = femdem("run", "chain_consistency")
+    assert code == 0, err
+    t = s["timing_s"]
+    assert list((tmp_path / "run0" / "plots").glob("*.png")), "no plot drawn"
+    assert 0.0 < t["plots"] <= t["io"] <= t["total"], t
+    assert wall_s(s) == pytest.approx(t["total"] - t["compile"] - t["plots"])
+
+
 def test_compare_sets_the_engines_wall_times_side_by_side_without_compiling(monkeypatch, tmp_path):
     """The first engine of a comparison on a new machine compiles the kernels the others load:
-    compare.json's wall time per engine is each run's total less its compile seconds."""
+    compare.json's wall time per engine is each run's total less its compile (and plot) seconds."""
     from coupling import compare
     real = compare.execute
 
@@ -199,5 +233,5 @@ def test_compare_sets_the_engines_wall_times_side_by_side_without_compiling(monk
     r = compare.compare("chain_consistency", ["yade", "liggghts"], {}, None, tmp_path / "c")
     for e in ("yade", "liggghts"):
         t = json.loads((tmp_path / "c" / e / "summary.json").read_text())["timing_s"]
-        assert r["wall_s"][e] == pytest.approx(t["total"] - t["compile"])
+        assert r["wall_s"][e] == pytest.approx(t["total"] - t["compile"] - t["plots"])
     assert r["compile_s"]["yade"] >= 30.0 and r["wall_s"]["yade"] < 30.0
