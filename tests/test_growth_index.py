@@ -202,3 +202,31 @@ def test_a_bonded_beam_s_compiled_index_is_its_criteria(case, seed, scale):
         assert np.any(fi.bottom) and not np.all(fi.bottom) and np.any(got[fi.bottom] > 0)
     finally:
         sim.close()
+
+
+@given(seed=st.integers(0, 2**31), strain=st.floats(1e-4, 3e-2), tied=st.booleans())
+@settings(max_examples=20, deadline=None)
+def test_the_far_field_probe_is_the_largest_seed_index_and_where(seed, strain, tied):
+    """The far_field_failure probe's series (the compiled pass, each criterion alone) are the
+    largest of the seed criteria over the elements (numpy, FemIndices) and that element's
+    centroid x, on a rough field; Hashin's only where the far-field plies are tied."""
+    from types import SimpleNamespace
+    from coupling.study.probes import _far_field_series
+    e = ELEMENTS["quad4"]
+    m = skfem.MeshQuad.init_tensor(np.linspace(0, 4e-3, 9), np.linspace(0, 1e-3, 5))
+    lam = _laminate([0.0, 90.0, 90.0, 0.0], elastic=False)
+    region = FemRegion(m, e, lam.D(0.0), 1500.0, 1.0)
+    u = strain * 1e-3 * np.random.default_rng(seed).standard_normal(region.X.shape)
+    state = SimpleNamespace(u=np.zeros_like(u), t=0.0)
+    built = SimpleNamespace(dyn=SimpleNamespace(region=region, state=state), lam=lam, dim=2,
+                            node_bonds=None if tied else object())
+    series = _far_field_series(built, "ff", {})
+    assert sorted(series) == sorted(["ff_hoffman", "ff_hoffman_x"] + (["ff_interlaminar", "ff_interlaminar_x"]
+                                                                        if tied else []))
+    assert series["ff_hoffman"]() == 0.0  # at rest
+    state.u[:], state.t = u, 1e-6
+    x = region.X[region.mesh.t.T][:, :, 0].mean(axis=1)
+    for name, index in zip(("interlaminar", "hoffman"), FemIndices(region, lam, 2)(region.centroid_strain_stress(u)[0])):
+        if f"ff_{name}" in series:
+            np.testing.assert_allclose(series[f"ff_{name}"](), index.max(), rtol=1e-10)
+            assert series[f"ff_{name}_x"]() == x[np.argmax(index)]
