@@ -18,10 +18,10 @@ point's speedup as the median of its rounds' ratios (a drift of the machine betw
 then cancels within each ratio). A run's wall time here is its ``timing_s.total`` less its
 kernels' compilation (``timing_s.compile``: a first run on a new machine, or of a build no run
 used before, compiles what later runs load from the cache; physics/compile_clock.py) and less
-the drawing of its plots from its finished history (``timing_s.plots``: about a second for any
-model, half of it importing matplotlib; in a 5 s coupled run a fifth of the wall and a fortieth
-of the all-DEM one's, so it set the ratio more than the models did); each run's compile and plot
-seconds are kept beside its wall time.
+the drawing of its plots from its finished history (``timing_s.plots``: about a second in a
+lone run, half of it importing matplotlib, half a second in a bench; whatever the model, so a
+tenth of a 4 s coupled run's wall and a sixtieth of a 31 s all-DEM run's: docs/benchmarks.md,
+session 47); each run's compile and plot seconds are kept beside its wall time.
 """
 from __future__ import annotations
 

@@ -185,9 +185,9 @@ def test_a_bench_leaves_the_kernels_compilation_out_of_its_wall_times(monkeypatc
 
 
 def test_a_bench_leaves_the_plots_drawing_out_of_its_wall_times(monkeypatch, tmp_path):
-    """Each run draws its plots from its finished history in about a second, whatever the model:
-    in a 5 s coupled run against a 40 s all-DEM one that second moved the ratio more than the
-    models did. The wall times are the totals less compile and plot seconds, both kept beside."""
+    """Each run draws its plots from its finished history in half a second to a second, whatever
+    the model: a tenth of a 4 s coupled run, a sixtieth of a 31 s all-DEM one. The wall times
+    are the totals less compile and plot seconds, both kept beside."""
     runs = iter([(40.0, 0.0, 1.2), (5.0, 0.5, 1.0), (41.0, 0.0, 1.1), (5.2, 0.0, 0.9)])  # (total, compile, plots)
 
     def execute(case, mode, dem, out, quiet=True):
