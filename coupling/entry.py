@@ -1,15 +1,24 @@
 """The ``femdem`` command's entry point. The command line's modules take a few seconds to import
 (numba, scipy, the scenes); a Ctrl-C in them ends the command as one during a run does, in one
-line and exit 130, where it printed the import's traceback."""
+line and exit 130, where it printed the import's traceback. What the imports write to stderr
+meanwhile is held and passed on once they finish: interrupted inside scipy's generated
+wrappers, its decorator module prints their source before it re-raises (a bare except)."""
 from __future__ import annotations
 
+import io
 import sys
 
 
 def main(argv: list[str] | None = None) -> int:
+    stderr, held = sys.stderr, io.StringIO()
+    sys.stderr = held
     try:
         from .cli import main as command
     except KeyboardInterrupt:
-        print("femdem: interrupted", file=sys.stderr)
+        sys.stderr = stderr
+        print("femdem: interrupted", file=stderr)
         return 130
+    finally:
+        sys.stderr = stderr
+    stderr.write(held.getvalue())
     return command(argv)

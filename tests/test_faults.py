@@ -247,6 +247,33 @@ def test_ctrl_c_while_the_command_imports_is_one_line(tmp_path):
         assert (proc.returncode, err) == (130, "femdem: interrupted\n"), (delay, proc.returncode, err)
 
 
+@pytest.mark.parametrize("interrupted", [True, False])
+def test_what_the_imports_print_is_held_until_they_finish(monkeypatch, capsys, interrupted):
+    """Interrupted inside scipy's generated wrappers, its decorator module printed their source
+    to stderr before re-raising (a bare except; CI, session 47): what the command's imports
+    write to stderr is held, dropped on a Ctrl-C (one line, exit 130) and passed on otherwise."""
+    import types
+    from coupling import entry
+
+    class Importing(types.ModuleType):
+        def __getattr__(self, name):
+            if name != "main":  # (what the import machinery asks of a module)
+                raise AttributeError(name)
+            print("Error in generated code:\ndef cgs(A, b): ...", file=sys.stderr)
+            if interrupted:
+                raise KeyboardInterrupt
+            return lambda argv: 7
+
+    monkeypatch.setitem(sys.modules, "coupling.cli", Importing("coupling.cli"))
+    code = entry.main([])
+    err = capsys.readouterr().err
+    if interrupted:
+        assert (code, err) == (130, "femdem: interrupted\n")
+    else:
+        assert (code, err) == (7, "Error in generated code:\ndef cgs(A, b): ...\n")
+    assert sys.stderr is not None and not isinstance(sys.stderr, __import__("io").StringIO)
+
+
 @pytest.mark.skipif(os.geteuid() != 0 or not shutil.which("mount"), reason="needs root to mount a small tmpfs")
 def test_a_full_device_stops_the_run_in_one_line_and_it_resumes(tmp_path):
     """The run's device fills up (a 200 KB tmpfs; bar_wave's frames take more): one line naming
