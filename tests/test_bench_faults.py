@@ -37,11 +37,24 @@ def fake_runs(monkeypatch, tmp_path):
 
     def execute(case, mode, dem, out, quiet=True):
         ran.append(case)
-        return 0, None, {"qoi": {"peak_load": 1.0}, "timing_s": {"total": 1.0}, "status": "ok", "message": ""}
+        return 0, None, {"qoi": {"peak_load": 1.0}, "timing_s": {"total": 1.0, "plots": 0.1}, "status": "ok",
+                         "message": ""}
 
     monkeypatch.setattr(bench, "execute", execute)
     monkeypatch.setenv("FEMDEM_CACHE_DIR", str(tmp_path / "cache"))
     return ran
+
+
+def test_a_reference_cached_with_its_plots_in_its_wall_runs_again(tmp_path, fake_runs):
+    """A reference cached before runs booked their plots apart (no timing_s.plots) has them in
+    its wall time, the points not: it runs again, and the new one is cached."""
+    reference = lambda k: bench.reference("chain_consistency", {}, "fem", "yade", tmp_path / f"ref{k}")[1]
+    assert reference(0) is False
+    (cached,) = (tmp_path / "cache" / "references").glob("*.json")
+    summary = json.loads(cached.read_text())
+    del summary["timing_s"]["plots"]
+    cached.write_text(json.dumps(summary))
+    assert [reference(1), reference(2)] == [False, True] and len(fake_runs) == 2
 
 
 def test_a_reference_runs_again_when_a_file_its_case_reads_changes(tmp_path, fake_runs):
