@@ -282,6 +282,7 @@ def cli(args) -> int:
     if compiled > 0.05:
         print(f"  (kernels compiled in these runs: {compiled:.1f} s in all, left out of the wall times)")
     drawn = [s for p in r["points"] for s in p["plots_s_runs"]] + ([] if ref["cached"] else ref["plots_s_runs"])
+    drawn = [s for s in drawn if s > 0.0]  # (a run that stopped drew none)
     if drawn:
         print(f"  (each run's plots, drawn after its results: median {statistics.median(drawn):.2f} s, left out of "
               "the wall times)")

@@ -265,13 +265,36 @@ def test_what_the_imports_print_is_held_until_they_finish(monkeypatch, capsys, i
             return lambda argv: 7
 
     monkeypatch.setitem(sys.modules, "coupling.cli", Importing("coupling.cli"))
+    before = sys.stderr
     code = entry.main([])
     err = capsys.readouterr().err
     if interrupted:
         assert (code, err) == (130, "femdem: interrupted\n")
     else:
         assert (code, err) == (7, "Error in generated code:\ndef cgs(A, b): ...\n")
-    assert sys.stderr is not None and not isinstance(sys.stderr, __import__("io").StringIO)
+    assert sys.stderr is before
+
+
+def test_a_failed_import_s_explanation_is_kept_and_a_closed_stderr_is_no_fault(monkeypatch, capsys):
+    """An import that prints why and fails (a numpy too old for scipy) shows what it printed
+    before its exception; with stderr closed (2>&-) the command runs."""
+    import types
+    from coupling import entry
+
+    class Failing(types.ModuleType):
+        def __getattr__(self, name):
+            if name != "main":
+                raise AttributeError(name)
+            print("A NumPy version >=1.25 is required", file=sys.stderr)
+            raise ImportError("numpy too old")
+
+    monkeypatch.setitem(sys.modules, "coupling.cli", Failing("coupling.cli"))
+    with pytest.raises(ImportError):
+        entry.main([])
+    assert capsys.readouterr().err == "A NumPy version >=1.25 is required\n"
+    monkeypatch.setitem(sys.modules, "coupling.cli", types.SimpleNamespace(main=lambda argv: 0))
+    monkeypatch.setattr(sys, "stderr", None)
+    assert entry.main([]) == 0
 
 
 @pytest.mark.skipif(os.geteuid() != 0 or not shutil.which("mount"), reason="needs root to mount a small tmpfs")

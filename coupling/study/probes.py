@@ -144,8 +144,8 @@ def _far_field_series(built, name, f):
     """The largest failure indices over the FEM's elements now (1 at initiation): Hoffman's
     ply index and, where the far-field plies are tied (a cohesive far field delaminates by
     itself), Hashin's interlaminar index, from each element's centroid strain and ply
-    (study/fields.ElementIndex on FemIndices' ply stresses; 0 at rest); a peak at 1 or more is
-    damage the model leaves out. No series without a FEM or a laminate."""
+    (study/fields.ElementIndex on FemIndices' ply stresses; 0 at rest, and a negative Hoffman
+    index reads 0); a peak at 1 or more is damage the model leaves out. No series without a FEM or a laminate."""
     dyn = built.dyn
     if dyn is None or built.lam is None:
         return {}
