@@ -1,29 +1,30 @@
 """The ``femdem`` command's entry point. The command line's modules take a few seconds to import
 (numba, scipy, the scenes); a Ctrl-C in them ends the command as one during a run does, in one
-line and exit 130, where it printed the import's traceback. What the imports write to stderr
-meanwhile is held and passed on once they finish or fail: interrupted inside scipy's generated
-wrappers, its decorator module prints their source before it re-raises (a bare except)."""
+line and exit 130, once they have loaded. Raised inside them it was not safe: tracebacks,
+scipy's decorator module printing a wrapper's source before re-raising (a bare except), and an
+import that swallowed it and ran the whole command (exit 0; both seen in CI). So SIGINT is held
+blocked while they load and delivered, if it came, when they are done."""
 from __future__ import annotations
 
-import io
+import signal
 import sys
+import threading
 
 
 def main(argv: list[str] | None = None) -> int:
-    stderr, held = sys.stderr, io.StringIO()
-    interrupted = False
+    # (only where Python's own handler would raise it, and in the one thread a command starts
+    # with: threads the imports start inherit the mask and leave SIGINT to this one)
+    hold = (hasattr(signal, "pthread_sigmask") and threading.current_thread() is threading.main_thread()
+            and signal.getsignal(signal.SIGINT) is signal.default_int_handler)
     try:
-        if stderr is not None:  # (closed, 2>&-: nothing to hold)
-            sys.stderr = held
-        from .cli import main as command
+        if hold:
+            signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        try:
+            from .cli import main as command
+        finally:
+            if hold:  # a Ctrl-C held meanwhile is raised here
+                signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
     except KeyboardInterrupt:
-        interrupted = True
-    finally:
-        sys.stderr = stderr
-        if not interrupted and stderr is not None:  # (a failed import's explanation comes before its traceback)
-            stderr.write(held.getvalue())
-    if interrupted:
-        if stderr is not None:
-            print("femdem: interrupted", file=stderr)
+        print("femdem: interrupted", file=sys.stderr)
         return 130
     return command(argv)

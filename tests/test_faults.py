@@ -236,7 +236,8 @@ def test_resuming_a_run_this_user_cannot_write_is_refused_in_one_line(tmp_path, 
 
 def test_ctrl_c_while_the_command_imports_is_one_line(tmp_path):
     """Ctrl-C in the command's first seconds (its modules importing: numba, scipy, the scenes)
-    ends it as during a run: exit 130, one line; it printed the import's traceback."""
+    ends it as during a run: exit 130, one line; it printed the import's traceback (and, raised
+    inside the imports, once a wrapper's source, once nothing: the command ran on, exit 0)."""
     femdem = str(Path(sys.executable).parent / "femdem")
     for delay in (0.2, 0.6):
         proc = subprocess.Popen([femdem, "run", "free_vibration", "--out", str(tmp_path / f"r{delay}"), "--quiet"],
@@ -244,57 +245,51 @@ def test_ctrl_c_while_the_command_imports_is_one_line(tmp_path):
         time.sleep(delay)
         proc.send_signal(signal.SIGINT)
         _, err = proc.communicate(timeout=120)
-        assert (proc.returncode, err) == (130, "femdem: interrupted\n"), (delay, proc.returncode, err)
+        # (one line; on a fast machine the run may have begun, and the line names its directory)
+        assert proc.returncode == 130 and err.startswith("femdem: interrupted") and err.count("\n") == 1, \
+            (delay, proc.returncode, err)
 
 
-@pytest.mark.parametrize("interrupted", [True, False])
-def test_what_the_imports_print_is_held_until_they_finish(monkeypatch, capsys, interrupted):
-    """Interrupted inside scipy's generated wrappers, its decorator module printed their source
-    to stderr before re-raising (a bare except; CI, session 47): what the command's imports
-    write to stderr is held, dropped on a Ctrl-C (one line, exit 130) and passed on otherwise."""
+def test_a_ctrl_c_while_the_command_imports_waits_for_them(monkeypatch, capsys):
+    """A Ctrl-C raised inside the imports was not safe (CI, session 47: scipy's decorator module
+    printed a wrapper's source before re-raising; another run swallowed it and ran the whole
+    command, exit 0): SIGINT is held while they load, the import finishes, and then the command
+    ends in one line, exit 130. An import that fails still shows what it printed."""
+    import threading
     import types
     from coupling import entry
+    finished = []
 
     class Importing(types.ModuleType):
         def __getattr__(self, name):
             if name != "main":  # (what the import machinery asks of a module)
                 raise AttributeError(name)
-            print("Error in generated code:\ndef cgs(A, b): ...", file=sys.stderr)
-            if interrupted:
-                raise KeyboardInterrupt
+            signal.pthread_kill(threading.get_ident(), signal.SIGINT)  # Ctrl-C, half way through
+            sum(range(10_000))  # (bytecodes, at which Python raises a signal it was given)
+            finished.append(True)
             return lambda argv: 7
 
-    monkeypatch.setitem(sys.modules, "coupling.cli", Importing("coupling.cli"))
-    before = sys.stderr
-    code = entry.main([])
-    err = capsys.readouterr().err
-    if interrupted:
-        assert (code, err) == (130, "femdem: interrupted\n")
-    else:
-        assert (code, err) == (7, "Error in generated code:\ndef cgs(A, b): ...\n")
-    assert sys.stderr is before
+    old = signal.signal(signal.SIGINT, signal.default_int_handler)  # (as in a command)
+    try:
+        monkeypatch.setitem(sys.modules, "coupling.cli", Importing("coupling.cli"))
+        assert entry.main([]) == 130 and finished == [True]
+        assert capsys.readouterr().err == "femdem: interrupted\n"
+        assert signal.SIGINT not in signal.pthread_sigmask(signal.SIG_BLOCK, set())  # unblocked again
 
+        class Failing(types.ModuleType):
+            def __getattr__(self, name):
+                if name != "main":
+                    raise AttributeError(name)
+                print("A NumPy version >=1.25 is required", file=sys.stderr)
+                raise ImportError("numpy too old")
 
-def test_a_failed_import_s_explanation_is_kept_and_a_closed_stderr_is_no_fault(monkeypatch, capsys):
-    """An import that prints why and fails (a numpy too old for scipy) shows what it printed
-    before its exception; with stderr closed (2>&-) the command runs."""
-    import types
-    from coupling import entry
-
-    class Failing(types.ModuleType):
-        def __getattr__(self, name):
-            if name != "main":
-                raise AttributeError(name)
-            print("A NumPy version >=1.25 is required", file=sys.stderr)
-            raise ImportError("numpy too old")
-
-    monkeypatch.setitem(sys.modules, "coupling.cli", Failing("coupling.cli"))
-    with pytest.raises(ImportError):
-        entry.main([])
-    assert capsys.readouterr().err == "A NumPy version >=1.25 is required\n"
-    monkeypatch.setitem(sys.modules, "coupling.cli", types.SimpleNamespace(main=lambda argv: 0))
-    monkeypatch.setattr(sys, "stderr", None)
-    assert entry.main([]) == 0
+        monkeypatch.setitem(sys.modules, "coupling.cli", Failing("coupling.cli"))
+        with pytest.raises(ImportError):
+            entry.main([])
+        assert capsys.readouterr().err == "A NumPy version >=1.25 is required\n"
+        assert signal.SIGINT not in signal.pthread_sigmask(signal.SIG_BLOCK, set())
+    finally:
+        signal.signal(signal.SIGINT, old)
 
 
 @pytest.mark.skipif(os.geteuid() != 0 or not shutil.which("mount"), reason="needs root to mount a small tmpfs")
