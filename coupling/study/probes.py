@@ -145,28 +145,28 @@ def _far_field_series(built, name, f):
     ply index and, where the far-field plies are tied (a cohesive far field delaminates by
     itself), Hashin's interlaminar index, from each element's centroid strain and ply
     (study/fields.ElementIndex on FemIndices' ply stresses; 0 at rest, and a negative Hoffman
-    index reads 0); a peak at 1 or more is damage the model leaves out. No series without a FEM or a laminate."""
+    index reads 0); a peak at 1 or more is damage the model leaves out. No series without a FEM
+    or a laminate."""
     dyn = built.dyn
     if dyn is None or built.lam is None:
         return {}
     from .fields import ElementIndex, FemIndices
     region = dyn.region
     fi = FemIndices(region, built.lam, built.dim)
-    # each criterion alone in the growth check's compiled pass (0 at rest; the numpy one took
-    # 0.2 ms a sample on 208 Q4, a twentieth of a 2-ply coupled beam's run)
+    # each criterion alone in the growth check's compiled pass (numpy took 0.2 ms a sample on
+    # 208 Q4, a twentieth of a 2-ply coupled beam's run)
     tied = built.node_bonds is None  # (Hashin's series only where the far field cannot delaminate)
     criteria = [ElementIndex(region, fi.ply_stress, False, True, fi.k, fi.Z0, fi.R0) if tied else None,
                 ElementIndex(region, fi.ply_stress, True, False, fi.k, fi.Z0, fi.R0)]  # (Hashin, Hoffman)
     x = region.X[region.mesh.t.T][:, :, 0].mean(axis=1)  # (nel,) m each element's centroid along x
-    now: dict = {}
+    now: dict[int, tuple[float, float, float]] = {}  # criterion -> (t, its peak, the peak's x)
 
     def largest(which: int, where: bool = False) -> float:
-        if now.get((which, "t")) != dyn.state.t:  # (once per sample for each criterion's two series)
-            now[which, "t"] = dyn.state.t
+        if which not in now or now[which][0] != dyn.state.t:  # (once per sample for its two series)
             index = criteria[which](dyn.state.u)
             k = int(np.argmax(index))
-            now[which] = (float(index[k]), float(x[k]))
-        return now[which][1] if where else now[which][0]
+            now[which] = (dyn.state.t, float(index[k]), float(x[k]))
+        return now[which][2] if where else now[which][1]
 
     series = {f"{name}_hoffman": lambda: largest(1), f"{name}_hoffman_x": lambda: largest(1, True)}
     if tied:
