@@ -182,6 +182,7 @@ class LawBonds:
                                                                      tangential(self.traction), 0.0)
         self.friction_work += 0.5 * float(np.einsum("b,bi,bi->", self.area, f, delta - self.delta))
         self.delta, self.traction, self.damage = delta, t, d
+        self._forget_compiled()  # (new arrays; the law's initiation replaced its index)
         self.force[:] = -self.area[:, None] * (self._to_global(t) if self.finite_rotation else t)
         return self.force
 
@@ -268,26 +269,52 @@ class LawBonds:
         rows (len(ids),) and end (nb, 2): this family's particles and bond ends as rows of x."""
         if self._plan is None:
             self._plan = _FusedPlan(self)
-        P, law = self._plan, self.law
+        P = self._plan
         self.time += dt
-        ply = P.law == law_kernels.PLY
-        work, fwork, vwork, snap = P.bonds_pass(
-            x, end, P.loc, self.d0, self.normal, self.area, P.K,
-            P.kin, P.X_mid, P.dir_a, P.dir_b, P.dir_e, P.dir_h, P.un, P.s0, P.L0, P.axis, P.local, P.rot, P.chord,
-            P.law, P.hp, P.pstress, P.inc_ptr, P.inc_bond, P.cell, P.axes, P.aligned, P.ply_axes,
-            law.strength_scale if ply else P.none, P.hk, P.Gf,
-            law.m0 if ply else P.none, law.mf if ply else P.none, law.index if ply else P.none,
-            law.crushed if ply else P.no,
-            float(self.friction), float(self.v_reg), self.damping, float(dt), self.time,
-            self.damage, self.delta, self.traction, self.t_failed, P.slots, P.active)
+        if P.serial and between_passes is None:  # one call through the family's compiled plan
+            work, fwork, vwork, snap = law_kernels.family_step(P.compiled or self._compiled(), x, end, rows, f,
+                                                               float(dt), self.time)
+        else:
+            named = self._pass_fields()
+            fields = [named[k] for k in law_kernels.PLAN_FIELDS]  # (bonds_pass's order: dt and the time after visc)
+            at = law_kernels.PLAN_FIELDS.index("visc") + 1
+            work, fwork, vwork, snap = P.bonds_pass(x, end, *fields[:at], float(dt), self.time, *fields[at:-3])
         self.work += work
         self.friction_work += fwork
         self.damping_work += vwork
         if snap:
-            law.snapback += int(snap)
+            self.law.snapback += int(snap)
         if between_passes is not None:
             between_passes(self)
-        P.gather_pass(P.slots_flat, P.ptr, P.entry, rows, f)
+        if not P.serial or between_passes is not None:
+            P.gather_pass(P.slots_flat, P.ptr, P.entry, rows, f)
+
+    def _pass_fields(self) -> dict:
+        """The fused passes' arrays and codes (law_kernels.PLAN_FIELDS) as they are now."""
+        P, law = self._plan, self.law
+        if P.law == law_kernels.PLY:  # the ply law's state (other families: stand-ins)
+            state = {"scale": law.strength_scale, "m0": law.m0, "mf": law.mf, "index": law.index, "crushed": law.crushed}
+        else:
+            state = {"scale": P.none, "m0": P.none, "mf": P.none, "index": P.none, "crushed": P.no}
+        return {"loc": P.loc, "d0": self.d0, "normal": self.normal, "area": self.area, "Kb": P.K, "kin": P.kin,
+                "X_mid": P.X_mid, "dir_a": P.dir_a, "dir_b": P.dir_b, "dir_e": P.dir_e, "dir_h": P.dir_h, "un": P.un,
+                "s0": P.s0, "L0": P.L0, "axis": P.axis, "local": P.local, "rot": P.rot, "chord": P.chord,
+                "law": P.law, "hp": P.hp, "pstress": P.pstress, "inc_ptr": P.inc_ptr, "inc_bond": P.inc_bond,
+                "cell": P.cell, "axes": P.axes, "aligned": P.aligned, "ply_axes": P.ply_axes, "hk": P.hk,
+                "Gf": P.Gf, **state, "friction": float(self.friction), "v_reg": float(self.v_reg),
+                "visc": self.damping, "damage": self.damage, "delta": self.delta, "traction": self.traction,
+                "t_failed": self.t_failed, "slots": P.slots, "active": P.active, "slots_flat": P.slots_flat,
+                "ptr": P.ptr, "entry": P.entry}
+
+    def _compiled(self) -> "law_kernels.FamilyPlan":
+        """The family's plan as one compiled argument, bound to the arrays the bonds hold now;
+        rebuilt after anything replaces one of them (_forget_compiled)."""
+        self._plan.compiled = law_kernels.family_plan(**self._pass_fields())
+        return self._plan.compiled
+
+    def _forget_compiled(self) -> None:
+        if self._plan is not None:
+            self._plan.compiled = None
 
     def evaluate_only(self, mine: np.ndarray) -> None:
         """Evaluate only the bonds ``mine`` (nb,) bool from now on (one MPI rank's share,
@@ -297,6 +324,7 @@ class LawBonds:
             self._plan = _FusedPlan(self)
         self._plan.active = np.flatnonzero(mine).astype(INDEX)
         self._plan.slots[~np.asarray(mine, bool)] = 0.0
+        self._forget_compiled()
 
     def softened(self) -> np.ndarray:
         """(nb,) share of each bond's softening branch travelled (0: elastic or not initiated,
@@ -371,6 +399,7 @@ class LawBonds:
             if "law_" + k in d:
                 v = np.array(d["law_" + k])
                 setattr(self.law, k, v.astype(type(getattr(self.law, k)[0])) if v.ndim else int(v))
+        self._forget_compiled()
 
 
 class _FusedPlan:
@@ -381,6 +410,7 @@ class _FusedPlan:
     def __init__(self, bonds: LawBonds):
         nb, law = len(bonds.pairs), bonds.law
         big = nb >= law_kernels.PARALLEL_BONDS and law_kernels.THREADS_ALLOWED
+        self.serial, self.compiled = not big, None  # (compiled: LawBonds._compiled)
         self.bonds_pass = law_kernels.bonds_pass if big else law_kernels.bonds_pass_serial
         self.gather_pass = law_kernels.gather_pass if big else law_kernels.gather_pass_serial
         self.loc = np.ascontiguousarray(bonds._loc, INDEX)
@@ -404,7 +434,7 @@ class _FusedPlan:
             bonds._axis = self.axis
         elif self.kin == law_kernels.FRAME_2D:
             bonds._local, bonds._rot, bonds._chord = self.local, self.rot, self.chord
-        self.K = np.ascontiguousarray(np.broadcast_to(np.asarray(law.K, float), (nb,)))
+        self.K = np.array(np.broadcast_to(np.asarray(law.K, float), (nb,)))  # (writable: one plan type)
         n = len(bonds.ids)
         if hasattr(law, "initiate") and not law.never_initiates:
             self.law = law_kernels.PLY

@@ -19,7 +19,8 @@ import os
 
 import numba
 import numpy as np
-from numba import prange
+from numba import prange, types
+from numba.experimental import structref
 
 from .compiled import kernel
 from .kernels import hoffman_bond, hoffman_bond_aligned
@@ -273,3 +274,58 @@ def _gather_pass(slots, ptr, entry, rows, f):
 # each pass twice: on all cores, and serial for the small families
 bonds_pass, bonds_pass_serial = kernel(parallel=True)(_bonds_pass), kernel(_bonds_pass)
 gather_pass, gather_pass_serial = kernel(parallel=True)(_gather_pass), kernel(_gather_pass)
+
+
+# -- a small family's step as one call ------------------------------------------------------------
+# A family's two passes take 52 arguments, and numba's dispatcher checks and unboxes each at every
+# call: 3.5 us a call (this VM), as long as the serial passes themselves on the seed beam's 20- and
+# 54-bond families. Held in one structref (FamilyPlan), the arrays cross into compiled code as one
+# pointer: 0.5 us. Only the serial build: a cached function that calls a parallel one crashes when
+# numba loads it from its cache (numba 0.60, measured), and a family big enough for the parallel
+# build does not notice 3 us.
+PLAN_FIELDS = ("loc", "d0", "normal", "area", "Kb", "kin", "X_mid", "dir_a", "dir_b", "dir_e", "dir_h", "un",
+               "s0", "L0", "axis", "local", "rot", "chord", "law", "hp", "pstress", "inc_ptr", "inc_bond", "cell",
+               "axes", "aligned", "ply_axes", "scale", "hk", "Gf", "m0", "mf", "index", "crushed", "friction",
+               "v_reg", "visc", "damage", "delta", "traction", "t_failed", "slots", "active", "slots_flat", "ptr",
+               "entry")
+
+
+@structref.register
+class FamilyPlanType(types.StructRef):
+    def preprocess_fields(self, fields):
+        return tuple((name, types.unliteral(t)) for name, t in fields)
+
+
+class FamilyPlan(structref.StructRefProxy):
+    """The arrays and codes of one family's two passes (PLAN_FIELDS: bonds_pass's arguments
+    but the positions, the ends, dt and the time; gather_pass's but the rows and the forces),
+    bound once. It holds the arrays, not copies: whoever replaces one of them (a restore, the
+    numpy reference) must build a new plan (LawBonds._compiled)."""
+
+
+structref.define_proxy(FamilyPlan, FamilyPlanType, PLAN_FIELDS)
+
+
+@kernel
+def _new_family_plan(fields):
+    return FamilyPlan(*fields)
+
+
+def family_plan(**fields) -> FamilyPlan:
+    """A FamilyPlan of the PLAN_FIELDS given by name (compiled and cached: one type for every
+    family, its index arrays INDEX, its floats float64)."""
+    return _new_family_plan(tuple(fields[k] for k in PLAN_FIELDS))
+
+
+@kernel
+def family_step(p, x, end, rows, f, dt, time):
+    """bonds_pass_serial then gather_pass_serial on the plan p (FamilyPlan): positions x (N, 3)
+    m, bond ends end (nb, 2) and the family's particles rows (np,) as rows of x and f (N, 3) N,
+    into which the forces are added; returns what bonds_pass returns."""
+    r = bonds_pass_serial(x, end, p.loc, p.d0, p.normal, p.area, p.Kb, p.kin, p.X_mid, p.dir_a, p.dir_b, p.dir_e,
+                          p.dir_h, p.un, p.s0, p.L0, p.axis, p.local, p.rot, p.chord, p.law, p.hp, p.pstress,
+                          p.inc_ptr, p.inc_bond, p.cell, p.axes, p.aligned, p.ply_axes, p.scale, p.hk, p.Gf, p.m0,
+                          p.mf, p.index, p.crushed, p.friction, p.v_reg, p.visc, dt, time, p.damage, p.delta,
+                          p.traction, p.t_failed, p.slots, p.active)
+    gather_pass_serial(p.slots_flat, p.ptr, p.entry, rows, f)
+    return r
