@@ -49,3 +49,21 @@ def spring_energy(X, bonds, K, r0):
         r = np.sqrt((X[j, 0] - X[i, 0]) ** 2 + (X[j, 1] - X[i, 1]) ** 2 + (X[j, 2] - X[i, 2]) ** 2)
         e += K[b] * (r - r0[b]) ** 2
     return e
+
+
+@kernel
+def free_kinetic_energy(mass, radius, V, W, held, driven):
+    """J, translation and rotation of the particles the engine moves: mass (n,) kg, radius (n,) m,
+    velocities V and spins W (n, 3); held (n,) bool (prescribed, fixed: none of theirs counts)
+    and driven (n, 3) bool (a symmetry plane's held components: no translation there)."""
+    e = 0.0
+    for p in range(mass.shape[0]):
+        if held[p]:
+            continue
+        t = 0.0
+        for k in range(3):
+            if not driven[p, k]:
+                t += V[p, k] * V[p, k]
+        w = W[p, 0] * W[p, 0] + W[p, 1] * W[p, 1] + W[p, 2] * W[p, 2]
+        e += mass[p] * t + 0.4 * mass[p] * radius[p] ** 2 * w
+    return 0.5 * e

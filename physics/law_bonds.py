@@ -92,6 +92,7 @@ class LawBonds:
         self._loc = inverse.reshape(-1, 2)  # bond end -> row of self.ids
         X = np.asarray(self.X, float)
         self.d0 = X[self.pairs[:, 1]] - X[self.pairs[:, 0]]
+        self.K_each = np.array(np.broadcast_to(np.asarray(self.law.K, float), (nb,)))  # Pa/m, each bond's stiffness
         self.damage = np.zeros(nb)
         self.delta = np.zeros((nb, 3))  # separation at the last evaluation, m
         self.traction = np.zeros((nb, 3))  # Pa
@@ -353,8 +354,11 @@ class LawBonds:
     def stored_energy(self) -> float:
         """J, elastic energy of the current tractions: (1 - d) K |delta|^2 / 2 per area, and the
         compressive penalty K dn^2 / 2 (slice)."""
-        dn, ds = self.split(self.delta)
-        return float(self.area @ self.law.stored_density(dn, ds, self.damage))
+        # compiled (each ledger sample asks every family: ~30 us a family in numpy); the laws'
+        # stored_density is its readable form (tests/test_law_kernels.py); only the cohesive
+        # law stores energy in shear
+        return law_kernels.stored_energy(self.area, self.delta, self.normal, self.damage, self.K_each,
+                                         not hasattr(self.law, "initiate"))
 
     def dissipated_energy(self) -> float:
         """J, decohesion + friction so far (slice)."""
@@ -434,7 +438,7 @@ class _FusedPlan:
             bonds._axis = self.axis
         elif self.kin == law_kernels.FRAME_2D:
             bonds._local, bonds._rot, bonds._chord = self.local, self.rot, self.chord
-        self.K = np.array(np.broadcast_to(np.asarray(law.K, float), (nb,)))  # (writable: one plan type)
+        self.K = bonds.K_each
         n = len(bonds.ids)
         if hasattr(law, "initiate") and not law.never_initiates:
             self.law = law_kernels.PLY

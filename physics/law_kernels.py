@@ -329,3 +329,20 @@ def family_step(p, x, end, rows, f, dt, time):
                           p.traction, p.t_failed, p.slots, p.active)
     gather_pass_serial(p.slots_flat, p.ptr, p.entry, rows, f)
     return r
+
+
+@kernel
+def stored_energy(area, delta, normal, damage, K, slip):
+    """J, the elastic energy of bonds at separations delta (nb, 3) m: area (nb,) m^2 times
+    K / 2 ((1 - d) (<dn>^2 + |ds|^2) + <-dn>^2) per area, the slip's term only with ``slip``
+    (the cohesive law's; a ply bond stores none in shear): the laws' stored_density summed."""
+    e = 0.0
+    for b in range(area.shape[0]):
+        n0, n1, n2 = normal[b, 0], normal[b, 1], normal[b, 2]
+        dn = delta[b, 0] * n0 + delta[b, 1] * n1 + delta[b, 2] * n2
+        opening = max(dn, 0.0) ** 2
+        if slip:
+            s0, s1, s2 = delta[b, 0] - dn * n0, delta[b, 1] - dn * n1, delta[b, 2] - dn * n2
+            opening += s0 * s0 + s1 * s1 + s2 * s2
+        e += area[b] * (0.5 * K[b] * ((1.0 - damage[b]) * opening + min(dn, 0.0) ** 2))
+    return e

@@ -479,3 +479,20 @@ def test_the_engines_spring_energy_is_the_harmonic_sum(seed, nb):
     r = np.linalg.norm(X[bonds[:, 1]] - X[bonds[:, 0]], axis=1)
     terms = K * (r - r0) ** 2
     assert spring_energy(X, bonds, K, r0) == pytest.approx(terms.sum(), rel=1e-12, abs=1e-12 * np.abs(terms).sum())
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.integers(1, 200))
+def test_the_engines_kinetic_energy_counts_what_they_move(seed, n):
+    """LIGGGHTS' and LAMMPS' kinetic energy at each sample (dem_region.kernels.free_kinetic_energy):
+    translation m |v|^2 / 2 of the components a particle moves and rotation (2/5) m r^2 |w|^2 / 2,
+    nothing of held particles, to round-off of the sums written out."""
+    from dem_region.kernels import free_kinetic_energy
+    rng = np.random.default_rng(seed)
+    m, r = rng.uniform(1e-9, 1.0, n), rng.uniform(1e-4, 1e-2, n)
+    V, W = rng.normal(size=(n, 3)), rng.normal(size=(n, 3)) * 100
+    held, driven = rng.random(n) < 0.2, rng.random((n, 3)) < 0.2
+    free = ~held
+    trans = sum(0.5 * m[p] * sum(V[p, k] ** 2 for k in range(3) if not driven[p, k]) for p in range(n) if free[p])
+    rot = sum(0.2 * m[p] * r[p] ** 2 * float(W[p] @ W[p]) for p in range(n) if free[p])
+    assert free_kinetic_energy(m, r, V, W, held, driven) == pytest.approx(trans + rot, rel=1e-12, abs=1e-300)

@@ -32,7 +32,7 @@ import os
 
 import numpy as np
 
-from ..kernels import add_held_forces, gather_forces, put_components, spring_energy
+from ..kernels import add_held_forces, free_kinetic_energy, gather_forces, put_components, spring_energy
 
 
 class VerletArrays:
@@ -198,10 +198,8 @@ class VerletArrays:
     def energies(self) -> dict[str, float]:
         """{kinetic (translation + rotation of the free particles), elastic (bonds, or Hertz
         contacts (8/15) E* sqrt(R*) delta^(5/2)), dissipated (contact damping, broken bonds)} J."""
-        m, V = self._free_mass_velocity()
-        W = self._omega()
-        I = 0.4 * m * self.scene.radius**2
-        kinetic = 0.5 * float(np.einsum("n,ni,ni->", m, V, V) + np.einsum("n,ni,ni->", I, W, W))
+        kinetic = free_kinetic_energy(self.mass, self.scene.radius, self.V, self._omega(), self._held_mask(),
+                                      self._driven)
         elastic = self._bond_energy() if len(self.scene.bonds) else self._hertz()[2]
         return {"kinetic": kinetic, "elastic": elastic, "dissipated": self._dissipated + self._released}
 
@@ -393,17 +391,6 @@ class VerletArrays:
         v = self.V - 0.5 * self.dt * self.F / self.mass[:, None]
         v[self.prescribed] = self.V[self.prescribed]
         return v
-
-    def _free_mass_velocity(self) -> tuple[np.ndarray, np.ndarray]:
-        """(masses with held and fixed particles zeroed, velocities with driven components
-        zeroed): what the kinetic energy of the DEM side counts."""
-        m = self.mass.copy()
-        m[self.prescribed] = 0.0
-        m[self.scene.groups.get("fixed", np.zeros(0, int))] = 0.0
-        V = self.V.copy()
-        if self._n_partial:
-            V[self._driven] = 0.0
-        return m, V
 
     def _bond_energy(self) -> float:
         """J, harmonic bonds K (r - r0)^2 and the brittle bonds carried here."""
