@@ -2,7 +2,8 @@
 
 A tie has three duties inside the coupled step (coupling/participants/clock.py calls them at every DEM
 step, after the engine computed its forces and before it moves): ``fast_force`` returns the
-nodal force (n_nodes, dim) N the DEM exerts on the FEM through the tie at this instant;
+nodal force (n_nodes, dim) N the DEM exerts on the FEM through the tie at this instant
+(given the nodes' positions (n_nodes, dim) m where the tie ``reads_nodes``, else None);
 ``follow`` runs after the FEM drift and tells the engine how the interface particles move
 next; ``energy`` is what the tie stores (J). ``node_mass`` is the particle mass the tie
 adds to the FEM nodes, and ``critical_dt`` the step limit the tie itself imposes.
@@ -23,6 +24,7 @@ class KinematicTie:
     """Interface particles slaved to the FEM: forces returned by the transpose map."""
 
     name = "kinematic"
+    reads_nodes = False  # fast_force needs no nodal positions (the clock passes None)
 
     def __init__(self, interface: TransitionInterface, dem, particle_mass: np.ndarray, seeded: int = 0):
         self.itf, self.dem = interface, dem
@@ -57,6 +59,7 @@ class PenaltyTie:
 
     name = "penalty"
     seeded = 0
+    reads_nodes = True  # fast_force stretches its springs to the nodes' positions
 
     def __init__(self, interface: TransitionInterface, dem, particle_mass: np.ndarray, stiffness: float):
         self.itf, self.dem, self.k = interface, dem, float(stiffness)

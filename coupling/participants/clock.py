@@ -117,7 +117,8 @@ class CoupledClock:
     def _read_interface(self) -> None:
         """The tie's forces from the particles on the FEM nodes at x_k (fast forces)."""
         fem = self.fem
-        self.f_tie = self.tie.fast_force(np.add(fem.region.X, fem.state.u, out=self._x_nodes))
+        x = np.add(fem.region.X, fem.state.u, out=self._x_nodes) if self.tie.reads_nodes else None
+        self.f_tie = self.tie.fast_force(x)
 
     def _fem_forces(self) -> None:
         """The band's forces at every DEM step; at a FEM step (every m-th) the FEM's own
