@@ -294,12 +294,14 @@ class LawBonds:
         """The fused passes' arrays and codes (law_kernels.PLAN_FIELDS) as they are now."""
         P, law = self._plan, self.law
         if P.law == law_kernels.PLY:  # the ply law's state (other families: stand-ins)
-            state = {"scale": law.strength_scale, "m0": law.m0, "mf": law.mf, "index": law.index, "crushed": law.crushed}
+            state = {"scale": law.strength_scale, "m0": law.m0, "mf": law.mf, "index": law.index,
+                     "crushed": law.crushed}
         else:
             state = {"scale": P.none, "m0": P.none, "mf": P.none, "index": P.none, "crushed": P.no}
-        return {"loc": P.loc, "d0": self.d0, "normal": self.normal, "area": self.area, "Kb": P.K, "kin": P.kin,
-                "X_mid": P.X_mid, "dir_a": P.dir_a, "dir_b": P.dir_b, "dir_e": P.dir_e, "dir_h": P.dir_h, "un": P.un,
-                "s0": P.s0, "L0": P.L0, "axis": P.axis, "local": P.local, "rot": P.rot, "chord": P.chord,
+        return {"loc": P.loc, "d0": self.d0, "normal": self.normal, "area": self.area, "Kb": self.K_each,
+                "kin": P.kin, "X_mid": P.X_mid, "dir_a": P.dir_a, "dir_b": P.dir_b, "dir_e": P.dir_e,
+                "dir_h": P.dir_h, "un": P.un, "s0": P.s0, "L0": P.L0, "axis": P.axis, "local": P.local,
+                "rot": P.rot, "chord": P.chord,
                 "law": P.law, "hp": P.hp, "pstress": P.pstress, "inc_ptr": P.inc_ptr, "inc_bond": P.inc_bond,
                 "cell": P.cell, "axes": P.axes, "aligned": P.aligned, "ply_axes": P.ply_axes, "hk": P.hk,
                 "Gf": P.Gf, **state, "friction": float(self.friction), "v_reg": float(self.v_reg),
@@ -438,7 +440,6 @@ class _FusedPlan:
             bonds._axis = self.axis
         elif self.kin == law_kernels.FRAME_2D:
             bonds._local, bonds._rot, bonds._chord = self.local, self.rot, self.chord
-        self.K = bonds.K_each
         n = len(bonds.ids)
         if hasattr(law, "initiate") and not law.never_initiates:
             self.law = law_kernels.PLY
