@@ -183,7 +183,7 @@ class LawBonds:
                                                                      tangential(self.traction), 0.0)
         self.friction_work += 0.5 * float(np.einsum("b,bi,bi->", self.area, f, delta - self.delta))
         self.delta, self.traction, self.damage = delta, t, d
-        self._forget_compiled()  # (new arrays; the law's initiation replaced its index)
+        self._unbind()  # (new arrays; the law's initiation replaced its index)
         self.force[:] = -self.area[:, None] * (self._to_global(t) if self.finite_rotation else t)
         return self.force
 
@@ -272,14 +272,13 @@ class LawBonds:
             self._plan = _FusedPlan(self)
         P = self._plan
         self.time += dt
+        if P.arguments is None:
+            self._bind()
         if P.serial and between_passes is None:  # one call through the family's compiled plan
-            work, fwork, vwork, snap = law_kernels.family_step(P.compiled or self._compiled(), x, end, rows, f,
-                                                               float(dt), self.time)
+            work, fwork, vwork, snap = law_kernels.family_step(P.compiled, x, end, rows, f, float(dt), self.time)
         else:
-            named = self._pass_fields()
-            fields = [named[k] for k in law_kernels.PLAN_FIELDS]  # (bonds_pass's order: dt and the time after visc)
-            at = law_kernels.PLAN_FIELDS.index("visc") + 1
-            work, fwork, vwork, snap = P.bonds_pass(x, end, *fields[:at], float(dt), self.time, *fields[at:-3])
+            head, tail = P.arguments
+            work, fwork, vwork, snap = P.bonds_pass(x, end, *head, float(dt), self.time, *tail)
         self.work += work
         self.friction_work += fwork
         self.damping_work += vwork
@@ -309,15 +308,19 @@ class LawBonds:
                 "t_failed": self.t_failed, "slots": P.slots, "active": P.active, "slots_flat": P.slots_flat,
                 "ptr": P.ptr, "entry": P.entry}
 
-    def _compiled(self) -> "law_kernels.FamilyPlan":
-        """The family's plan as one compiled argument, bound to the arrays the bonds hold now;
-        rebuilt after anything replaces one of them (_forget_compiled)."""
-        self._plan.compiled = law_kernels.family_plan(**self._pass_fields())
-        return self._plan.compiled
+    def _bind(self) -> None:
+        """The passes' arguments bound to the arrays the bonds hold now: bonds_pass's as tuples
+        before and after (dt, time), and for the serial build the plan as one compiled argument;
+        bound again after anything replaces one of those arrays (_unbind)."""
+        P, named = self._plan, self._pass_fields()
+        fields = [named[k] for k in law_kernels.PLAN_FIELDS]
+        at = law_kernels.PLAN_FIELDS.index("visc") + 1  # (bonds_pass takes dt and the time after visc)
+        P.arguments = tuple(fields[:at]), tuple(fields[at:-3])
+        P.compiled = law_kernels.family_plan(**named) if P.serial else None
 
-    def _forget_compiled(self) -> None:
+    def _unbind(self) -> None:
         if self._plan is not None:
-            self._plan.compiled = None
+            self._plan.compiled = self._plan.arguments = None
 
     def evaluate_only(self, mine: np.ndarray) -> None:
         """Evaluate only the bonds ``mine`` (nb,) bool from now on (one MPI rank's share,
@@ -327,7 +330,7 @@ class LawBonds:
             self._plan = _FusedPlan(self)
         self._plan.active = np.flatnonzero(mine).astype(INDEX)
         self._plan.slots[~np.asarray(mine, bool)] = 0.0
-        self._forget_compiled()
+        self._unbind()
 
     def softened(self) -> np.ndarray:
         """(nb,) share of each bond's softening branch travelled (0: elastic or not initiated,
@@ -405,7 +408,7 @@ class LawBonds:
             if "law_" + k in d:
                 v = np.array(d["law_" + k])
                 setattr(self.law, k, v.astype(type(getattr(self.law, k)[0])) if v.ndim else int(v))
-        self._forget_compiled()
+        self._unbind()
 
 
 class _FusedPlan:
@@ -416,7 +419,7 @@ class _FusedPlan:
     def __init__(self, bonds: LawBonds):
         nb, law = len(bonds.pairs), bonds.law
         big = nb >= law_kernels.PARALLEL_BONDS and law_kernels.THREADS_ALLOWED
-        self.serial, self.compiled = not big, None  # (compiled: LawBonds._compiled)
+        self.serial, self.compiled, self.arguments = not big, None, None  # (LawBonds._bind)
         self.bonds_pass = law_kernels.bonds_pass if big else law_kernels.bonds_pass_serial
         self.gather_pass = law_kernels.gather_pass if big else law_kernels.gather_pass_serial
         self.loc = np.ascontiguousarray(bonds._loc, INDEX)

@@ -145,33 +145,38 @@ def _path(X, plane, seed, steps, strain=0.3):
 
 
 @pytest.mark.parametrize("name", FAMILIES)
+@pytest.mark.parametrize("passes", ["plan", "arguments"])
 @settings(max_examples=3, deadline=None, derandomize=True)
 @given(seed=st.integers(0, 2**31), before=st.integers(5, 25), after=st.integers(5, 25))
-def test_the_compiled_plan_follows_replaced_arrays(name, seed, before, after):
-    """A small family's step runs through one compiled plan holding its arrays; a restore (a
-    checkpoint, a grown zone's carried state) and the numpy reference replace them. A family
-    that ran another path, then restored, goes on as the family it was restored from, to the
-    bit; a family stepped by the reference and the fused step in turn is the reference."""
+def test_the_compiled_plan_follows_replaced_arrays(name, passes, seed, before, after):
+    """A family's step runs on arguments bound once (a small family's: one compiled plan holding
+    its arrays; a large one's, or one whose ranks exchange between the passes: argument tuples);
+    a restore (a checkpoint, a grown zone's carried state) and the numpy reference replace
+    them. A family that ran another path, then restored, goes on as the family it was restored
+    from, to the bit; a family stepped by the reference and the fused step in turn is the
+    reference. ``passes``: the plan, or the tuples (a no-op between the passes takes them)."""
     bonds0, X, plane = _family(name)
+    between = None if passes == "plan" else (lambda bonds: None)
+    step = lambda bonds, target: bonds.apply(target, 1e-9, between_passes=between)
     path = _path(X, plane, seed, before + after)
     a, b = copy.deepcopy(bonds0), copy.deepcopy(bonds0)
     for x in path[:before]:
-        a.apply(_Arrays(x.copy()), 1e-9)
+        step(a, _Arrays(x.copy()))
     state = copy.deepcopy(a.checkpoint_state())
     for x in _path(X, plane, seed + 1, before):  # b: bound to its arrays by another path
-        b.apply(_Arrays(x.copy()), 1e-9)
+        step(b, _Arrays(x.copy()))
     b.restore_state(state)
     for x in path[before:]:
         ta, tb = _Arrays(x.copy()), _Arrays(x.copy())
-        a.apply(ta, 1e-9)
-        b.apply(tb, 1e-9)
+        step(a, ta)
+        step(b, tb)
         np.testing.assert_array_equal(ta.f, tb.f)
     np.testing.assert_array_equal(a.damage, b.damage)
     assert a.damage.any() or name == "lattice_springs"  # (not vacuous: the path softened bonds; springs never do)
     mixed, ref = copy.deepcopy(bonds0), copy.deepcopy(bonds0)
     for k, x in enumerate(path):
         tm, tr = _Arrays(x.copy()), _Engine(x.copy())
-        (mixed.apply(tm, 1e-9) if k % 2 else mixed.apply_reference(_Engine(tm.x), 1e-9))
+        (step(mixed, tm) if k % 2 else mixed.apply_reference(_Engine(tm.x), 1e-9))
         ref.apply_reference(tr, 1e-9)
         if k % 2:
             np.testing.assert_array_equal(tm.f, tr.f)
