@@ -274,7 +274,8 @@ class LawBonds:
         self.time += dt
         if P.arguments is None:
             self._bind()
-        if P.serial and between_passes is None:  # one call through the family's compiled plan
+        one_call = P.serial and between_passes is None  # both passes through the family's compiled plan
+        if one_call:
             work, fwork, vwork, snap = law_kernels.family_step(P.compiled, x, end, rows, f, float(dt), self.time)
         else:
             head, tail = P.arguments
@@ -286,7 +287,7 @@ class LawBonds:
             self.law.snapback += int(snap)
         if between_passes is not None:
             between_passes(self)
-        if not P.serial or between_passes is not None:
+        if not one_call:
             P.gather_pass(P.slots_flat, P.ptr, P.entry, rows, f)
 
     def _pass_fields(self) -> dict:
