@@ -16,8 +16,6 @@ import numpy as np
 from physics.impactor import RigidImpactor
 from physics.kernels import ball_leapfrog, ball_on_particles
 
-BALLS = ("sphere", "cylinder")  # the shapes with a compiled contact (a cylinder without an axis is a disc)
-
 
 class ParticleImpactor:
     """impactor: a 3D RigidImpactor (sphere: a cylinder's section in a plane scene) whose radius
@@ -73,7 +71,7 @@ class ParticleImpactor:
                 backend.add_forces(self.ids[touching], self._f_prev[touching])
             self.force = self._F_prev
             return
-        if self.imp.shape in BALLS and self.imp.axis is None and hasattr(backend, "rows_of"):
+        if self.imp.ball and hasattr(backend, "rows_of"):
             if self._bound is not backend:  # bind once: the candidates as rows of the target's arrays
                 self._rows = np.ascontiguousarray(backend.rows_of(self.ids), np.int64)
                 self._bound = backend
@@ -85,7 +83,7 @@ class ParticleImpactor:
                 started = True
             imp, F = self.imp, self._F_now
             pen2, dwork = ball_on_particles(backend.x, backend.f, self._rows, self._x_now, self._f_now,
-                                            self._x_prev, self._f_prev, started, dt, imp.x, imp.v,
+                                            self._x_prev, self._f_prev, started, dt, imp.x, imp.ball_axis, imp.v,
                                             float(imp.radius), float(imp.penalty), float(imp.friction),
                                             float(imp.slip_velocity**2), F)
             self.stored = 0.5 * imp.penalty * pen2

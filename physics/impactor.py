@@ -55,8 +55,11 @@ class RigidImpactor:
         self.v = np.array(self.velocity, float)
         self.a = np.zeros_like(self.x)
         self.x_at_forces = self.x.copy()
+        # the compiled contact's axis: a cylinder's, zeros for a ball (a sphere, a disc)
+        self.ball_axis = np.zeros_like(self.x)
         if self.shape == "cylinder" and self.axis is not None:
             self.axis = np.asarray(self.axis, float) / np.linalg.norm(self.axis)
+            self.ball_axis = self.axis.copy()
         if self.shape in ("flat_punch", "rod"):
             ax = np.asarray(self.axis if self.axis is not None else -self.v, float)
             self.axis = ax / np.linalg.norm(ax)
@@ -65,8 +68,9 @@ class RigidImpactor:
 
     @property
     def ball(self) -> bool:
-        """A sphere, or a cylinder seen in its cross-section (2D, no axis): contact with a ball."""
-        return self.shape == "sphere" or (self.shape == "cylinder" and self.axis is None)
+        """A sphere or a cylinder (a disc in 2D; in 3D along ``axis``, a ball in its cross-section):
+        the compiled contact (kernels.ball_contact)."""
+        return self.shape in ("sphere", "cylinder")
 
     def restrict(self, nodes: np.ndarray) -> None:
         """The contact nodes' indices (m,) in the order ``forces`` receives them (the footprint's
@@ -112,7 +116,8 @@ class RigidImpactor:
         stored penalty energy (J)."""
         if self.ball:  # compiled
             f = np.empty((len(x), x.shape[1]))
-            pen2 = ball_contact(np.ascontiguousarray(x, float), np.ascontiguousarray(v, float), self.x, self.v,
+            pen2 = ball_contact(np.ascontiguousarray(x, float), np.ascontiguousarray(v, float), self.x, self.ball_axis,
+                                self.v,
                                 float(self.radius), float(self.penalty), float(self.friction),
                                 float(self.slip_velocity**2), f)
             return f, 0.5 * self.penalty * pen2

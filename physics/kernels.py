@@ -212,19 +212,24 @@ def _einsum_dot(a, a0, b):
 
 
 @kernel
-def ball_contact(x, v, centre, velocity, radius, penalty, friction, slip2, f):
+def ball_contact(x, v, centre, axis, velocity, radius, penalty, friction, slip2, f):
     """Penalty contact of a rigid ball (a disc in 2D) with points x (m, dim) m moving at v
     (m, dim) m/s: normal force penalty x penetration along the outward normal, Coulomb friction
     against the tangential slip regularised by slip2 (m/s)^2 (RigidImpactor.forces for the
-    ball, each point once: the numpy form's digits). f (m, dim) N out; returns the sum of the
-    squared penetrations m^2."""
+    ball, each point once: the numpy form's digits). axis (dim,): a cylinder's unit axis (its
+    cross-section is the ball: the distance is taken normal to it), zeros for a ball. f (m, dim)
+    N out; returns the sum of the squared penetrations m^2."""
     m, dim = x.shape
     pen2 = 0.0
     d, vt, still = np.empty(dim), np.empty(dim), np.zeros(dim)  # normal, tangential slip rate
     for p in range(m):
-        r2 = 0.0
+        s = 0.0
         for i in range(dim):
             d[i] = x[p, i] - centre[i]
+            s += d[i] * axis[i]
+        r2 = 0.0
+        for i in range(dim):
+            d[i] -= s * axis[i]  # (a ball: s = 0, d as it was)
             r2 += d[i] * d[i]
         r = np.sqrt(r2)
         rr = max(r, 1e-300)
@@ -245,8 +250,10 @@ def ball_contact(x, v, centre, velocity, radius, penalty, friction, slip2, f):
 
 
 @kernel
-def ball_on_nodes(X, u, v, du, S, xs, vs, centre, velocity, radius, penalty, friction, slip2, fc, fc_prev, f, F):
-    """A rigid ball on FEM surface nodes S (m,) in one pass: ball_contact on the positions
+def ball_on_nodes(X, u, v, du, S, xs, vs, centre, axis, velocity, radius, penalty, friction, slip2, fc, fc_prev, f,
+                  F):
+    """A rigid ball (or a cylinder along ``axis``: ball_contact) on FEM surface nodes S (m,) in
+    one pass: ball_contact on the positions
     X + u (n, dim) m and velocities v (n, dim) m/s of the nodes S (gathered into the scratch
     xs, vs (m, dim)); its forces into fc (m, dim) N and added to f[S] (f (n, dim) N); F (dim,)
     N out, the force on the ball (minus the sum of fc). Returns (sum of squared penetrations
@@ -257,7 +264,7 @@ def ball_on_nodes(X, u, v, du, S, xs, vs, centre, velocity, radius, penalty, fri
         for i in range(dim):
             xs[r, i] = X[p, i] + u[p, i]
             vs[r, i] = v[p, i]
-    pen2 = ball_contact(xs, vs, centre, velocity, radius, penalty, friction, slip2, fc)
+    pen2 = ball_contact(xs, vs, centre, axis, velocity, radius, penalty, friction, slip2, fc)
     work = 0.0
     for i in range(dim):
         F[i] = 0.0
@@ -271,10 +278,10 @@ def ball_on_nodes(X, u, v, du, S, xs, vs, centre, velocity, radius, penalty, fri
 
 
 @kernel
-def ball_on_particles(X, Fout, rows, x, f, x_prev, f_prev, started, dt, centre, velocity, radius, penalty,
-                      friction, slip2, F):
-    """One step of a rigid ball on particles, in place on an engine's arrays: ball_contact on
-    the candidates' positions X[rows] (X (N, 3) m, rows (k,)), velocities from the last step
+def ball_on_particles(X, Fout, rows, x, f, x_prev, f_prev, started, dt, centre, axis, velocity, radius,
+                      penalty, friction, slip2, F):
+    """One step of a rigid ball (or a cylinder along ``axis`` (3,), zeros for a ball: ball_contact)
+    on particles, in place on an engine's arrays: ball_contact on the candidates' positions X[rows] (X (N, 3) m, rows (k,)), velocities from the last step
     ((x - x_prev) / dt once ``started``), their forces added to Fout[rows] (N) where non-zero.
     Out: x, f (k, 3) this step's positions and forces; F (3,) N the force on the ball (minus
     the sum of f, row by row as numpy's sum over axis 0); f_prev is used as scratch. Returns
@@ -288,6 +295,8 @@ def ball_on_particles(X, Fout, rows, x, f, x_prev, f_prev, started, dt, centre, 
         x0, x1, x2 = X[p, 0], X[p, 1], X[p, 2]
         x[r, 0], x[r, 1], x[r, 2] = x0, x1, x2
         d0, d1, d2 = x0 - centre[0], x1 - centre[1], x2 - centre[2]
+        s = (d0 * axis[0] + d1 * axis[1]) + d2 * axis[2]  # (a cylinder's axial part; a ball: 0)
+        d0, d1, d2 = d0 - s * axis[0], d1 - s * axis[1], d2 - s * axis[2]
         dist = np.sqrt(0.0 + d0 * d0 + d1 * d1 + d2 * d2)
         rr = max(dist, 1e-300)
         pen = max(radius - dist, 0.0)

@@ -64,18 +64,19 @@ class _GapBall(RigidImpactor):
     ball = False  # the readable gap form on gathered nodes, not the compiled pass
 
 
-@pytest.mark.parametrize("dim, shape, friction", [(2, "cylinder", 0.3), (3, "sphere", 0.2)])
-def test_compiled_ball_on_the_surface_is_the_gathered_gap_form(dim, shape, friction):
-    """The ball's one-pass contact on the FEM's surface nodes (kernels.ball_on_nodes) steps the
-    block as the gap form on the gathered nodes does: nodes, impactor and contact ledger equal
-    to round-off over an oblique impact with friction (the force on the ball and the work are
-    summed in another order)."""
+@pytest.mark.parametrize("dim, shape, friction, axis", [(2, "cylinder", 0.3, None), (3, "sphere", 0.2, None),
+                                                       (3, "cylinder", 0.25, (0.3, 1.0, 0.1))])
+def test_compiled_ball_on_the_surface_is_the_gathered_gap_form(dim, shape, friction, axis):
+    """The ball's (or a cylinder's, along an oblique axis) one-pass contact on the FEM's surface
+    nodes (kernels.ball_on_nodes) steps the block as the gap form on the gathered nodes does:
+    nodes, impactor and contact ledger equal to round-off over an oblique impact with friction
+    (the force on the ball and the work are summed in another order)."""
     runs = []
     for kind in (RigidImpactor, _GapBall):
         c = np.array([0.05, 0.06] if dim == 2 else [0.05, 0.05, 0.06])
         v = np.zeros(dim)
         v[0], v[dim - 1] = 3.0, -20.0
-        imp = kind(shape, c, 0.0099, 0.05, v, penalty=5e7, friction=friction)
+        imp = kind(shape, c, 0.0099, 0.05, v, penalty=5e7, friction=friction, axis=axis)
         dyn = ExplicitDynamics(_block(dim), impactors=[imp])
         _run(dyn, 300, safety=0.5)
         assert np.abs(imp.v - v).max() > 0.5  # it hit
