@@ -61,11 +61,26 @@ PATIENCE_MAX = max(PATIENCE, float(os.environ.get("FEMDEM_PATIENCE_MAX", "2e-3")
 YIELD_EVERY = int(os.environ.get("FEMDEM_YIELD_EVERY", "1"))
 
 
+class Readable:
+    """``Connection.poll(timeout)`` on socket ``fd`` through one poll object made once: the
+    Connection's builds a selector at every call (~20 us, and a few hundred bytes of Python
+    objects: a wait's allocations then depended on how many rounds it took,
+    tests/test_hot_path.py). True when a message, or the other side's hang-up, is waiting or
+    comes within ``timeout`` s."""
+
+    def __init__(self, fd: int):
+        self._poller = select.poll()
+        self._poller.register(fd, select.POLLIN)
+
+    def __call__(self, timeout: float = 0.0) -> bool:
+        return bool(self._poller.poll(timeout * 1e3))
+
+
 class Backoff:
     """Wait politely for a counter, watching a socket too: spin ``spin`` rounds, then yield the
     core until ``yield_rounds`` (a few milliseconds), then wait in the socket's select for
-    ``longest`` s at a time, which a message ends at once. ``poll(timeout)`` (a Connection's)
-    costs about 20 us (it builds a selector), so before that it is asked every 32nd round.
+    ``longest`` s at a time, which a message ends at once. ``poll(timeout)`` (Readable) is asked
+    every 32nd round before that.
     With a ``bell`` that has wake-ups: after ``patience`` s of that, sleep until rung (or a
     message comes). ``adapt``: the patience follows the waits this Backoff saw end (``reset``
     after each): twice their running mean (1/16 weight to the newest), between ``patience``

@@ -24,7 +24,7 @@ import numpy as np
 
 from dem_region import state_block, wire
 from dem_region.doorbell import (ABORT, ADVANCE, ASK, DONE, DT, ENGINE_S, GO, HOOK, INTERFACE_S, MODELS_S, STEPS, SYNC,
-                                 WRITTEN, Backoff, Doorbell)
+                                 WRITTEN, Backoff, Doorbell, Readable)
 
 
 def _attach_block(name: str) -> shared_memory.SharedMemory:
@@ -74,6 +74,7 @@ class _Ranks:
         self.conn, self.comm = conn, comm
         self.root = comm is None or comm.Get_rank() == 0
         self.told_stop = False
+        self._readable = Readable(conn.fileno()) if self.root and conn is not None else None
 
     def recv(self):
         if self.comm is None:
@@ -106,7 +107,7 @@ class _Ranks:
 
     def poll(self, timeout: float = 0.0) -> bool:
         """A message from the orchestrator is waiting, or comes within ``timeout`` s (rank 0)."""
-        return self.conn.poll(timeout)
+        return self._readable(timeout)
 
     def fileno(self) -> int:
         """The socket to the orchestrator (rank 0)."""

@@ -10,7 +10,7 @@ from multiprocessing import resource_tracker, shared_memory
 import numpy as np
 import pytest
 
-from dem_region.doorbell import ADVANCE, DONE, ENGINE_S, GO, HOOK, MODELS_S, STEPS, Backoff, Doorbell, available
+from dem_region.doorbell import ADVANCE, DONE, ENGINE_S, GO, HOOK, MODELS_S, STEPS, Backoff, Doorbell, Readable, available
 
 
 def _worker(name: str, rounds: int) -> None:
@@ -301,3 +301,35 @@ def test_an_interrupt_while_a_hook_waits_for_a_query_leaves_no_stale_reply(monke
             remote.advance(hook, 10)
         assert Engine.steps == 3 and Engine.queries == 1
         assert remote._call("call", "energies")[1] == {"queries": 2}
+
+
+def test_a_waits_poll_of_the_socket_says_what_connection_poll_says_and_allocates_nothing_lasting():
+    """doorbell.Readable, the waits' poll: False on a quiet socket, True with a message waiting
+    and after the other side hung up (as Connection.poll); a call's transient Python objects stay
+    under 100 bytes (Connection.poll built a selector, a few hundred: a wait's allocations then
+    grew with its rounds, which made tests/test_hot_path.py's engine stage flaky)."""
+    import tracemalloc
+    from multiprocessing.connection import Connection
+    ours, theirs = socket.socketpair()
+    conn, other = Connection(ours.detach()), Connection(theirs.detach())
+    ready = Readable(conn.fileno())
+    assert not ready(0.0) and not conn.poll(0.0)
+    ready(0.0)
+    tracemalloc.start()
+    try:
+        held, _ = tracemalloc.get_traced_memory()
+        tracemalloc.reset_peak()
+        for _ in range(100):
+            ready(0.0)
+        peak = tracemalloc.get_traced_memory()[1] - held
+    finally:
+        tracemalloc.stop()
+    assert peak < 100, peak
+    other.send(("hook",))
+    assert ready(0.0) and conn.poll(0.0)
+    assert conn.recv() == ("hook",) and not ready(0.0)
+    t0 = time.perf_counter()
+    assert not ready(0.02) and time.perf_counter() - t0 >= 0.015  # a timeout in seconds
+    other.close()
+    assert ready(0.0) and conn.poll(0.0)  # the hang-up
+    conn.close()

@@ -15,6 +15,7 @@ import tempfile
 import time
 import subprocess
 import sys
+from functools import cached_property
 from multiprocessing import shared_memory
 from multiprocessing.connection import Connection
 from pathlib import Path
@@ -24,7 +25,7 @@ import numpy as np
 
 from .. import state_block, wire
 from ..doorbell import (ABORT, ADVANCE, ASK, DONE, DT, ENGINE_S, GO, HOOK, INTERFACE_S, MODELS_S, STEPS, SYNC, WRITTEN,
-                        Backoff, Doorbell, available, can_wake, new_block)
+                        Backoff, Doorbell, Readable, available, can_wake, new_block)
 from ..model_step import set_model_states
 from ..scene import DemScene
 from .base import EngineUnavailable
@@ -238,6 +239,11 @@ class RemoteBackend:
     def set_all_velocities(self, v: np.ndarray) -> None:
         self._call("call", "set_all_velocities", np.asarray(v, float).tolist())
 
+    @cached_property
+    def _readable(self) -> Readable:
+        """The waits' poll of the socket (doorbell.Readable), made at its first use."""
+        return Readable(self.conn.fileno())
+
     def _run(self, op: str, between: Callable[[], None] | None, n: int = 1) -> None:
         clock = time.perf_counter
         if self.bell is None and available():
@@ -289,7 +295,7 @@ class RemoteBackend:
                 if rung and bell.rung(DONE, self._advances):
                     self._advancing = False
                     return in_hook, (bell.value[ENGINE_S], bell.value[MODELS_S], bell.value[INTERFACE_S])
-                if not wait(self.conn.poll):
+                if not wait(self._readable):
                     continue
             msg = self._recv()
             if msg[0] == "hook":  # the socket's handshake (no doorbell on this machine)
@@ -324,7 +330,7 @@ class RemoteBackend:
                 self._advancing = False
             elif self.proc is not None and self.proc.poll() is not None:
                 return
-            elif wait(self.conn.poll):
+            elif wait(self._readable):
                 try:
                     reply = self.conn.recv()
                 except (EOFError, OSError):
