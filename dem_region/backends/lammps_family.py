@@ -32,7 +32,7 @@ import os
 
 import numpy as np
 
-from ..kernels import add_held_forces, free_kinetic_energy, gather_forces, put_components, spring_energy
+from ..kernels import add_held_forces, free_kinetic_energy, gather_forces, put_components, spring_energy, take_rows
 
 
 class VerletArrays:
@@ -333,15 +333,17 @@ class VerletArrays:
         plan (which components of which rows take motion) is built once per ids array and kept
         per array: the models' and a penalty tie's write in turn at every step."""
         F = np.ascontiguousarray(F, float).reshape(-1, 3)
-        key = (ids, self.dt, self._held_mask(), self._n_partial)  # a new set, step or prescription: a new plan
+        held = self._held_mask()
         plans = self.__dict__.setdefault("_plans", {})
-        known = plans.pop(id(ids), None)  # (re-inserted last: the least recently used go first)
-        if known is None or any(a is not b for a, b in zip(key, known[0])):
-            if len(plans) >= 8:  # (sets come and go with rebuilt models: keep the few in use)
+        known = plans.get(id(ids))  # (ids, dt, held, partial count, plan)
+        # a new set, step or prescription: a new plan
+        if known is None or known[0] is not ids or known[1] != self.dt or known[2] is not held \
+                or known[3] != self._n_partial:
+            plans.pop(id(ids), None)
+            if len(plans) >= 8:  # (sets come and go with rebuilt models: keep the few made last)
                 plans.pop(next(iter(plans)))
-            known = key, self._force_plan(np.asarray(ids, int))
-        plans[id(ids)] = known
-        rows, takes, mass = known[1]
+            known = plans[id(ids)] = ids, self.dt, held, self._n_partial, self._force_plan(np.asarray(ids, int))
+        rows, takes, mass = known[4]
         add_held_forces(self._added, self.F, self.V, rows, F, takes, 0.5 * self.dt, mass)
 
     def _force_plan(self, ids: np.ndarray):
@@ -356,7 +358,7 @@ class VerletArrays:
 
     def read_positions(self, ids: np.ndarray, out: np.ndarray) -> None:
         """out (k, 3) m <- the positions of particles ``ids`` (one bulk copy)."""
-        np.take(self.X, ids, axis=0, out=out, mode="clip")  # "raise" copies through a temporary
+        take_rows(out, self.X, ids)
 
     positions_into = read_positions  # (the penalty tie's read of its particles, each step)
 
