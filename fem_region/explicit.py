@@ -15,8 +15,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from .bulk_viscosity import BulkViscosity
-from .kernels import add_first_columns, axpy, divide_rows, scale_rows, support_reaction, \
-    kinetic_energy as nodal_kinetic_energy
+from .kernels import add_first_columns, axpy, residual_finish, residual_start, respa_kicks, respa_kicks_drift, \
+    scale_rows, kinetic_energy as nodal_kinetic_energy
 from physics.impactor import RigidImpactor
 from physics.kernels import add_at, ball_on_nodes
 from .region import FemRegion
@@ -149,6 +149,7 @@ class ExplicitDynamics:
         self._contact_buffers = [tuple((np.zeros((len(self._surface), r.dim)), np.zeros(r.dim)) for _ in range(2))
                                  for _ in self.impactors]
         self._xs, self._vs = np.zeros((len(self._surface), r.dim)), np.zeros((len(self._surface), r.dim))
+        self._no_node_forces = np.zeros((0, 3))
 
     def add_nodal_mass(self, extra: np.ndarray) -> None:
         """Add (n_nodes,) kg at the nodes (interface particle masses shared by a tie)."""
@@ -216,6 +217,19 @@ class ExplicitDynamics:
         axpy(s.u, dt, s.v)
         s.t += dt
 
+    def respa_drift(self, dt_fast: float, f_tie, band, dt: float, slow: bool, f_fast, a_slow) -> None:
+        """The impulse clock's kicks of one fast step (fem_region.kernels.respa_kicks: f_tie, band
+        (n_nodes, dim) N, a FEM step of dt s when ``slow``; f_fast, a_slow out) and the drift over
+        dt_fast s after them: one compiled pass where nothing moves on its own (no impactor, no
+        moving support), else the kicks and ``drift`` in turn."""
+        s = self.state
+        if self.impactors or self._moving or self._rest_dofs is None:
+            respa_kicks(s.v, s.a, f_tie, band, self.m, dt, dt_fast, slow, True, f_fast, a_slow)
+            self.drift(dt_fast)
+            return
+        respa_kicks_drift(s.v, s.a, f_tie, band, self.m, dt, dt_fast, slow, f_fast, a_slow, s.u, self._rest_dofs)
+        s.t += dt_fast
+
     def _set_prescribed_velocities(self, t: float) -> None:
         """The supports' velocities at time t (s) on their DOFs."""
         vflat = self.state.v.reshape(-1)
@@ -237,45 +251,45 @@ class ExplicitDynamics:
         """Forces at the new configuration; a = f / m except on prescribed DOFs."""
         s, L = self.state, self.ledger
         f_int = self.region.internal_force(s.u, out=self._f_int)
-        du = np.subtract(s.u, self._u_at_forces, out=self._du)  # motion since the last force evaluation
+        du = self._du  # the motion since the last force evaluation
         self._dt = s.t - self._t_at_forces
         if self.loads:  # into the buffer the last step's loads are not in
+            np.subtract(s.u, self._u_at_forces, out=du)
             f_ext = self.external_force(s.t, self._f_ext[1] if s.f_ext is self._f_ext[0] else self._f_ext[0])
             L.external_work += 0.5 * float(np.vdot(np.add(s.f_ext, f_ext, out=self._f), du))
             f = np.subtract(f_ext, f_int, out=self._f)
         else:  # nothing applied: no work; s.f_ext stays zero
-            f_ext, f = s.f_ext, np.negative(f_int, out=self._f)
+            f_ext, f = s.f_ext, self._f
+            residual_start(s.u, self._u_at_forces, f_int, du, f)
         f_damp = self._damping_force(s.v)
         if f_damp is not None:
             L.damping += float(np.vdot(f_damp, du))
             f -= f_damp
         if self.impactors:
             self._contact(du, f)
-        for model in self.node_forces:
-            add_first_columns(f, model())
-        a = s.a
-        divide_rows(f, self.m, a)
-        if self._prescribed.size:
-            self._support_reaction(f, du, a)
+        node_f = self._no_node_forces
+        for k, model in enumerate(self.node_forces):  # (the last one's forces added in the pass below)
+            if k + 1 < len(self.node_forces):
+                add_first_columns(f, model())
+            else:
+                node_f = model()
+        L.support_work += residual_finish(f, node_f, self.m, s.a, s.u, self._u_at_forces, *self._support_arguments())
         s.f_ext = f_ext
         self.f_int = f_int
-        np.copyto(self._u_at_forces, s.u)  # the ledger's time level
         self._t_at_forces = s.t
 
-    def _support_reaction(self, f: np.ndarray, du: np.ndarray, a: np.ndarray) -> None:
-        """The prescribed DOFs: the support supplies what their path needs beyond the residual
-        force f (n_nodes, dim) N; its work over du (n_nodes, dim) m by the trapezoidal rule;
-        their accelerations into a. One compiled pass into the buffers of the prescribed DOFs."""
+    def _support_arguments(self) -> tuple:
+        """residual_finish's arguments of the prescribed DOFs (dofs, their masses, accelerations,
+        the last and this evaluation's reactions, the motion du): the reaction goes into the
+        buffer the last one is not in."""
         P = self._prescribed
-        a_pres = self._prescribed_acceleration()
         if getattr(self, "_m_prescribed_of", None) is not self.m:  # the prescribed DOFs' masses, per mass array
             self._m_prescribed, self._m_prescribed_of = self.m.repeat(self.region.dim)[P], self.m
             self._pres_r = [np.zeros(P.size) for _ in range(2)]
-        r0, r1 = self._pres_r  # the reaction goes into the one the last step's is not in
+        r0, r1 = self._pres_r
         reaction = r1 if self._reaction_prev is r0 else r0
-        self.ledger.support_work += support_reaction(f, du, a, P, self._m_prescribed, a_pres, self._reaction_prev,
-                                                     reaction)
-        self._reaction_prev = reaction
+        prev, self._reaction_prev = self._reaction_prev, reaction
+        return P, self._m_prescribed, self._prescribed_acceleration(), prev, reaction, self._du
 
     def reaction(self, dofs: np.ndarray) -> float:
         """N, sum of the support reactions on flat DOFs ``dofs`` (all prescribed) at the last

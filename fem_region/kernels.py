@@ -279,6 +279,32 @@ def support_reaction(f, du, a, dofs, m, a_pres, reaction_prev, reaction):
 
 
 @kernel
+def residual_start(u, u_at, f_int, du, f):
+    """du = u - u_at (the motion since the last force evaluation) and f = -f_int (no loads):
+    np.subtract and np.negative in one pass (n_nodes, dim)."""
+    for i in range(u.shape[0]):
+        for k in range(u.shape[1]):
+            du[i, k] = u[i, k] - u_at[i, k]
+            f[i, k] = -f_int[i, k]
+
+
+@kernel
+def residual_finish(f, node_f, m, a, u, u_at, dofs, m_pres, a_pres, reaction_prev, reaction, du):
+    """The end of a force evaluation in one pass: f += node_f[:, :dim] (the node-force models'
+    sum, (n, 3) N; none: (0, 3)), a = f / m, the prescribed DOFs' reactions and accelerations
+    (support_reaction), u_at <- u (the ledger's time level). Returns the supports' work (J)."""
+    n, dim = f.shape
+    if node_f.shape[0]:
+        add_first_columns(f, node_f)
+    divide_rows(f, m, a)
+    work = support_reaction(f, du, a, dofs, m_pres, a_pres, reaction_prev, reaction) if dofs.shape[0] else 0.0
+    for i in range(n):
+        for k in range(dim):
+            u_at[i, k] = u[i, k]
+    return work
+
+
+@kernel
 def respa_kicks(v, a, f_tie, band, m, dt, dt_fast, slow, kick, f_fast, a_slow):
     """The FEM's kicks of one DEM step of the impulse (r-RESPA) clock, in one pass:
     f_fast = f_tie - band; at a FEM step (``slow``) a_slow = a - (f_fast - f_tie) / m and
@@ -301,6 +327,18 @@ def respa_kicks(v, a, f_tie, band, m, dt, dt_fast, slow, kick, f_fast, a_slow):
                     v[i, k] += dt * s
             if kick:
                 v[i, k] += dt_fast * ff / m[i]
+
+
+@kernel
+def respa_kicks_drift(v, a, f_tie, band, m, dt, dt_fast, slow, f_fast, a_slow, u, rest):
+    """respa_kicks (with the kicks), then the FEM's drift over dt_fast where nothing moves on
+    its own: the fixed DOFs ``rest`` (flat, into (n_nodes, dim)) at rest, u += dt_fast v. The
+    operations of the three calls in their order (the same digits)."""
+    respa_kicks(v, a, f_tie, band, m, dt, dt_fast, slow, True, f_fast, a_slow)
+    dim = v.shape[1]
+    for e in range(rest.shape[0]):
+        v[rest[e] // dim, rest[e] % dim] = 0.0
+    axpy(u, dt_fast, v)
 
 
 @kernel

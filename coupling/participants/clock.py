@@ -139,8 +139,7 @@ class CoupledClock:
 
     def _fem_kick_drift(self) -> None:
         fem = self.fem
-        self._kicks(self._band_f, self._slow, True)
-        fem.drift(self.dt_dem)
+        fem.respa_drift(self.dt_dem, self.f_tie, self._band_f, self.dt, self._slow, self._f_fast, self._a_slow)
         self.interface_work += self.dt_dem * float(np.vdot(self.f_tie, fem.state.v))
 
     def _write_interface(self) -> None:
