@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from physics.impactor import RigidImpactor
-from physics.kernels import ball_leapfrog, ball_on_particles
+from physics.kernels import ball_step
 
 
 class ParticleImpactor:
@@ -81,17 +81,16 @@ class ParticleImpactor:
                 started = False
             else:
                 started = True
-            imp, F = self.imp, self._F_now
-            pen2, dwork = ball_on_particles(backend.x, backend.f, self._rows, self._x_now, self._f_now,
-                                            self._x_prev, self._f_prev, started, dt, imp.x, imp.ball_axis, imp.v,
-                                            float(imp.radius), float(imp.penalty), float(imp.friction),
-                                            float(imp.slip_velocity**2), F)
+            imp = self.imp
+            # the contact, then the ball's work over its last move, X_prev, F_prev <- this step's and
+            # its leapfrog, in place
+            pen2, dwork, work = ball_step(backend.x, backend.f, self._rows, self._x_now, self._f_now, self._x_prev,
+                                          self._f_prev, started, dt, imp.x, imp.ball_axis, imp.v, float(imp.radius),
+                                          float(imp.penalty), float(imp.friction), float(imp.slip_velocity**2),
+                                          self._F_now, self._X_prev, self._F_prev, float(imp.mass), self._free)
             self.stored = 0.5 * imp.penalty * pen2
             # this step's state becomes the last one (buffers swapped, nothing allocated)
             self._x_prev, self._x_now, self._f_prev, self._f_now = self._x_now, self._x_prev, self._f_now, self._f_prev
-            # its work over the last move, X_prev, F_prev <- this step's, and its leapfrog, in place
-            work = ball_leapfrog(imp.x, imp.v, F, self._X_prev, self._F_prev, float(imp.mass), self._free,
-                                 dt if dt > 0 else 0.0, started)
             if started:
                 self.work += 0.5 * (dwork + work)
             self.force = self._F_prev

@@ -227,6 +227,16 @@ def add_columns(out, a, b):
 
 
 @kernel
+def nodes_as_particles(x, f, X, u):
+    """x[:, :dim] = X + u and f = 0 (x, f (n, 3); X, u (n, dim)): the FEM's nodes as law bonds
+    see particles, positions refreshed and forces cleared for an evaluation."""
+    add_columns(x, X, u)
+    for i in range(f.shape[0]):
+        for k in range(3):
+            f[i, k] = 0.0
+
+
+@kernel
 def add_first_columns(out, a):
     """out += a[:, :c], c = out.shape[1] (forces of (n, 3) rows onto (n, dim) nodes), in place."""
     for i in range(out.shape[0]):

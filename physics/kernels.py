@@ -354,6 +354,18 @@ def ball_leapfrog(X, V, F, X_prev, F_prev, mass, free, dt, started):
 
 
 @kernel
+def ball_step(X, Fout, rows, x, f, x_prev, f_prev, started, dt, centre, axis, velocity, radius, penalty, friction,
+              slip2, F, X_prev, F_prev, mass, free):
+    """One engine step of a rigid ball on particles: ball_on_particles, then ball_leapfrog of
+    the ball (centre, velocity: its X, V) under the force F it found. Returns (sum of squared
+    penetrations m^2, the particles' contact work J, the ball's own J), as the two return."""
+    pen2, dwork = ball_on_particles(X, Fout, rows, x, f, x_prev, f_prev, started, dt, centre, axis, velocity, radius,
+                                    penalty, friction, slip2, F)
+    work = ball_leapfrog(centre, velocity, F, X_prev, F_prev, mass, free, dt if dt > 0 else 0.0, started)
+    return pen2, dwork, work
+
+
+@kernel
 def numpy_sum(a):
     """np.sum of a contiguous (n,) array with numpy's digits: its reduction takes runs of 8192
     (the ufunc buffer) in turn, each summed pairwise."""

@@ -8,7 +8,7 @@ import numpy as np
 from fem_region import mesh
 from fem_region.elements import ELEMENTS
 from fem_region.explicit import ExplicitDynamics
-from fem_region.kernels import add_columns, face_forces, face_points
+from fem_region.kernels import face_forces, face_points, nodes_as_particles
 from fem_region.region import FORMULATIONS, INTEGRATIONS, FemRegion
 from fem_region.stable_step import pair_springs, spring_stiffness
 
@@ -134,7 +134,8 @@ class FemNodes:
         self.f = np.zeros((dyn.region.n_nodes, 3))
 
     def refresh(self) -> None:
-        add_columns(self.x, self.dyn.region.X, self.dyn.state.u)  # (numpy's strided form: a temporary)
+        """Positions from the FEM's state, forces cleared: before each evaluation."""
+        nodes_as_particles(self.x, self.f, self.dyn.region.X, self.dyn.state.u)
 
     def rows_of(self, ids):
         return ids
@@ -161,6 +162,7 @@ class FaceNodes(FemNodes):
         self.f = np.zeros((n + len(self.nodes), 3))
 
     def refresh(self) -> None:
+        self.f[:] = 0.0
         np.add(self.dyn.region.X, self.dyn.state.u, out=self.x[: self.n, : self.dyn.region.dim])
         face_points(self.x, self.nodes, self.weights, self.n)
 
@@ -179,7 +181,6 @@ class NodeBondForces:
         self.last = 0.0  # s, time of the last evaluation
 
     def __call__(self) -> np.ndarray:
-        self.nodes.f[:] = 0.0
         self.nodes.refresh()
         self.bonds.apply(self.nodes, self.dyn.state.t - self.last)
         self.last = self.dyn.state.t
