@@ -267,12 +267,11 @@ class ExplicitDynamics:
             f -= f_damp
         if self.impactors:
             self._contact(du, f)
-        node_f = self._no_node_forces
-        for k, model in enumerate(self.node_forces):  # (the last one's forces added in the pass below)
-            if k + 1 < len(self.node_forces):
-                add_first_columns(f, model())
-            else:
-                node_f = model()
+        node_f = self._no_node_forces  # (the last model's forces are added in the pass below)
+        for model in self.node_forces:
+            if node_f.size:
+                add_first_columns(f, node_f)
+            node_f = model()
         L.support_work += residual_finish(f, node_f, self.m, s.a, s.u, self._u_at_forces, *self._support_arguments())
         s.f_ext = f_ext
         self.f_int = f_int

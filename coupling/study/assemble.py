@@ -65,6 +65,11 @@ class Laminate:
                                   m["G23"])
         return materials.rotate(C, materials.ply_axes(angle, dim))
 
+    def by_run(self, of, run: np.ndarray) -> np.ndarray:
+        """(k, ...) ``of(angle)`` (D or C) of each element's ply run ``run`` (k,): one per run,
+        repeated (formed per element, a 2D beam's build spent 0.07 s on its 216 rotations)."""
+        return np.array([of(a) for a in self.angles])[np.asarray(run, int)]
+
     def D(self, angle: float) -> np.ndarray:
         """(3, 3) plane-strain stiffness Pa of a ply at ``angle`` in the slice."""
         return materials.plane_strain(self.stiffness(angle, 2))
@@ -372,7 +377,7 @@ def _fem_region(p: dict, built: Built, x0: float, reserve: bool = False):
     cy = m.p[1, m.t].mean(axis=0)
     run = np.searchsorted(np.cumsum(lam.plies) * lam.ply_thickness, cy)
     m = _split(p, built, m, run)
-    D = np.array([lam.D(lam.angles[b]) for b in run])
+    D = lam.by_run(lam.D, run)
     return make_region(m, p, D, lam.ply["rho"], built.t)
 
 
@@ -419,8 +424,8 @@ def _file_region(p: dict, built: Built, x0: float):
                         f"{'lines' if dim == 2 else 'planes'} there")
     m = _split(p, built, m, run)
     if dim == 2:
-        return make_region(m, p, np.array([lam.D(lam.angles[r]) for r in run]), lam.ply["rho"], built.t)
-    return make_region(m, p, np.array([lam.C(lam.angles[r]) for r in run]), lam.ply["rho"], 1.0)
+        return make_region(m, p, lam.by_run(lam.D, run), lam.ply["rho"], built.t)
+    return make_region(m, p, lam.by_run(lam.C, run), lam.ply["rho"], 1.0)
 
 
 def _split(p: dict, built: Built, m, run: np.ndarray):
@@ -480,7 +485,7 @@ def _fem_block(p: dict, built: Built, x0: float, reserve: bool = False):
     m = mesh.box(_along(p, built, x0, reserve),
                  np.linspace(0.0, 0.5 * p["geometry.width"], p["mesh.elements_width"] + 1), _through(p, lam), "hex8")
     run = np.searchsorted(np.cumsum(lam.plies) * lam.ply_thickness, m.p[2, m.t].mean(axis=0))
-    C = np.array([lam.C(lam.angles[b]) for b in run])
+    C = lam.by_run(lam.C, run)
     return make_region(_split(p, built, m, run), p, C, lam.ply["rho"], 1.0)
 
 
@@ -815,7 +820,7 @@ def _fem_plate(p: dict, built: Built, fp, hole: bool, reserve: float = 0.0):
         m = m.remove_elements(np.flatnonzero(fp.inside(centre[0], centre[1])))
         centre = m.p[:, m.t].mean(axis=1)
     run = np.searchsorted(np.cumsum(lam.plies) * lam.ply_thickness, centre[2])
-    return make_region(_split(p, built, m, run), p, np.array([lam.C(lam.angles[b]) for b in run]), lam.ply["rho"],
+    return make_region(_split(p, built, m, run), p, lam.by_run(lam.C, run), lam.ply["rho"],
                        1.0)
 
 
