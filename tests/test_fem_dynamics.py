@@ -7,7 +7,7 @@ from hypothesis import strategies as st
 from fem_region import loads, materials, mesh
 from fem_region.bulk_viscosity import BulkViscosity
 from fem_region.elements import ELEMENTS
-from fem_region.explicit import ExplicitDynamics, PrescribedMotion
+from fem_region.explicit import ExplicitDynamics, PrescribedMotion, at_rest
 from physics.impactor import RigidImpactor
 from fem_region.region import FemRegion
 
@@ -298,3 +298,75 @@ def test_the_viscous_hourglass_form_needs_its_damping_in_the_step():
     r = FemRegion(m, ELEMENTS["quad4"], D, 1540.0, 1e-3, "reduced", hourglass="viscous", hourglass_kappa=0.1)
     undamped = 0.9 * assembled_critical_dt(r.K, r.mass, 2)
     assert not _energy_ratio(0.1, 6.7, 0, undamped) <= 1.0  # (nan: it overflowed)
+
+
+class _NodeForces:
+    """A node-force model (ExplicitDynamics.node_forces): forces (n, 3) N of a linear spring
+    field on the nodes' displacements, padded to three columns as law bonds on nodes leave them."""
+
+    def __init__(self, dyn, k: float, seed: int):
+        self.dyn, self.k = dyn, k
+        self.w = np.random.default_rng(seed).uniform(0.5, 1.5, size=(dyn.region.n_nodes, 1))
+        self.f = np.zeros((dyn.region.n_nodes, 3))
+
+    def __call__(self):
+        self.f[:, : self.dyn.region.dim] = -self.k * self.w * self.dyn.state.u
+        return self.f
+
+
+@settings(max_examples=12, deadline=None, derandomize=True)
+@given(dim=st.sampled_from([2, 3]), models=st.integers(0, 2), seed=st.integers(0, 2**31), moving=st.booleans())
+def test_the_force_evaluation_is_its_steps_written_out(dim, models, seed, moving):
+    """ExplicitDynamics.compute_forces (its compiled start and finish: kernels.residual_start /
+    residual_finish) against its steps in numpy: f = -K u + the node-force models' sum, a = f / m
+    off the prescribed DOFs, the supports' reaction m a_pres - f on them and its trapezoidal work,
+    over a few steps of a block with a fixed edge, a moving one or none, and 0-2 node-force
+    models; and the clock's fused kicks and drift (respa_drift) against respa_kicks then drift."""
+    from fem_region.kernels import respa_kicks
+    rng = np.random.default_rng(seed)
+    r = _block(dim, n=4)
+    X = r.X
+    left = np.flatnonzero(np.isclose(X[:, 0], 0.0))
+    dofs = (left[:, None] * dim + np.arange(dim)).ravel()
+    supports = [PrescribedMotion(dofs, (lambda t: 0.3 * t) if moving else at_rest)]
+    dyn = ExplicitDynamics(r, supports=supports)
+    dyn.node_forces = [_NodeForces(dyn, 1e8, seed + k) for k in range(models)]
+    dyn.start()
+    ref = dyn.ledger.support_work
+    u_at, r_prev = np.zeros_like(dyn.state.u), np.zeros(dofs.size)
+    dt = 0.5 * dyn.critical_dt()
+    for step in range(4):
+        dyn.state.v[:] = rng.normal(size=dyn.state.v.shape)
+        dyn.kick_drift(dt)
+        u = dyn.state.u.copy()
+        dyn.compute_forces()
+        f = -(r.K @ u.ravel()).reshape(u.shape)
+        for model in dyn.node_forces:
+            f += model()[:, :dim]
+        a = f / dyn.m[:, None]
+        t = dyn.state.t
+        a_pres = np.full(dofs.size, 0.3 if moving else 0.0)  # (v = 0.3 t)
+        a.reshape(-1)[dofs] = a_pres
+        reaction = dyn.m.repeat(dim)[dofs] * a_pres - f.reshape(-1)[dofs]
+        ref += 0.5 * float(np.sum((r_prev + reaction) * (u - u_at).reshape(-1)[dofs]))
+        np.testing.assert_allclose(dyn.state.a, a, rtol=1e-12, atol=1e-12 * np.abs(a).max())
+        np.testing.assert_allclose(dyn._reaction_prev, reaction, rtol=1e-12, atol=1e-12 * np.abs(reaction).max())
+        assert dyn.ledger.support_work == pytest.approx(ref, rel=1e-10, abs=1e-20)
+        np.testing.assert_array_equal(dyn._u_at_forces, u)
+        u_at, r_prev = u, reaction
+        assert t == dyn.state.t
+    # the fused kicks and drift against the two steps, from the same state
+    f_tie = rng.normal(size=dyn.state.v.shape)
+    outs = []
+    for fused in (True, False):
+        d = ExplicitDynamics(r, supports=supports)
+        d.state.u[:], d.state.v[:], d.state.a[:] = dyn.state.u, dyn.state.v, dyn.state.a
+        f_fast, a_slow = np.zeros_like(f_tie), np.zeros_like(f_tie)
+        if fused:
+            d.respa_drift(0.5 * dt, f_tie, np.zeros((0, dim)), dt, True, f_fast, a_slow)
+        else:
+            respa_kicks(d.state.v, d.state.a, f_tie, np.zeros((0, dim)), d.m, dt, 0.5 * dt, True, True, f_fast, a_slow)
+            d.drift(0.5 * dt)
+        outs.append((d.state.u.copy(), d.state.v.copy(), d.state.t, f_fast, a_slow))
+    for got, want in zip(*outs):
+        np.testing.assert_array_equal(got, want)
