@@ -74,6 +74,17 @@ def test_no_stage_allocates_with_the_model(mode, dem):
     _same_at_both_sizes(_stage_peaks(mode, dem, SMALL), _stage_peaks(mode, dem, LARGE))
 
 
+# the 3D strip at two zone widths and spans (more particles and more nodes): its cylinder lies
+# along the width, a contact of its own (an axis), which the 2D beams' disc does not take
+SMALL_3D = {"geometry.span": 40e-3, "zone.half_width": 3.6e-3, "mesh.elements_along": 10}
+LARGE_3D = {"geometry.span": 80e-3, "zone.half_width": 6e-3, "mesh.elements_along": 20}
+
+
+def test_no_stage_allocates_with_the_3d_model():
+    _same_at_both_sizes(*(_stage_peaks("coupled", "liggghts", size, "beam_impact_3d_coarse")
+                          for size in (SMALL_3D, LARGE_3D)))
+
+
 # the paths a case file may choose beyond the defaults: the penalty tie; several DEM steps per
 # FEM step (the interface band's elements among the fast forces, linear and Total Lagrangian);
 # one-point elements with the stiffness or the viscous hourglass control (the band's elements are
