@@ -13,8 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from physics.impactor import RigidImpactor
-from physics.kernels import ball_step
+from physics.impactor import FLAT, RigidImpactor
+from physics.kernels import impactor_step
 
 
 class ParticleImpactor:
@@ -71,7 +71,7 @@ class ParticleImpactor:
                 backend.add_forces(self.ids[touching], self._f_prev[touching])
             self.force = self._F_prev
             return
-        if self.imp.ball and hasattr(backend, "rows_of"):
+        if (self.imp.ball or self.imp.shape in FLAT) and self.imp._k is None and hasattr(backend, "rows_of"):
             if self._bound is not backend:  # bind once: the candidates as rows of the target's arrays
                 self._rows = np.ascontiguousarray(backend.rows_of(self.ids), np.int64)
                 self._bound = backend
@@ -84,10 +84,12 @@ class ParticleImpactor:
             imp = self.imp
             # the contact, then the ball's work over its last move, X_prev, F_prev <- this step's and
             # its leapfrog, in place
-            pen2, dwork, work = ball_step(backend.x, backend.f, self._rows, self._x_now, self._f_now, self._x_prev,
-                                          self._f_prev, started, dt, imp.x, imp.ball_axis, imp.v, float(imp.radius),
-                                          float(imp.penalty), float(imp.friction), float(imp.slip_velocity**2),
-                                          self._F_now, self._X_prev, self._F_prev, float(imp.mass), self._free)
+            flat = imp.shape in FLAT
+            pen2, dwork, work = impactor_step(
+                backend.x, backend.f, self._rows, self._x_now, self._f_now, self._x_prev, self._f_prev, started, dt,
+                imp.x, imp.contact_axis, imp.v, float(imp.radius), flat, float(imp.depth) if flat else 0.0,
+                float(imp.rounding), float(imp.penalty), float(imp.friction), float(imp.slip_velocity**2),
+                self._F_now, self._X_prev, self._F_prev, float(imp.mass), self._free)
             self.stored = 0.5 * imp.penalty * pen2
             # this step's state becomes the last one (buffers swapped, nothing allocated)
             self._x_prev, self._x_now, self._f_prev, self._f_now = self._x_now, self._x_prev, self._f_now, self._f_prev

@@ -305,7 +305,7 @@ class ExplicitDynamics:
             if imp.ball:  # one compiled pass, into the buffer the last step's forces are not in
                 a, b = self._contact_buffers[k]
                 fc, F = b if fc_prev is a[0] else a
-                pen2, work = ball_on_nodes(r.X, s.u, s.v, du, S, self._xs, self._vs, imp.x, imp.ball_axis, imp.v,
+                pen2, work = ball_on_nodes(r.X, s.u, s.v, du, S, self._xs, self._vs, imp.x, imp.contact_axis, imp.v,
                                            float(imp.radius), float(imp.penalty), float(imp.friction),
                                            float(imp.slip_velocity**2), fc, fc_prev, f, F)
                 energy = 0.5 * imp.penalty * pen2

@@ -17,6 +17,7 @@ import numpy as np
 from .kernels import ball_contact
 
 SHAPES = ("sphere", "cylinder", "flat_punch", "rod")
+FLAT = ("flat_punch", "rod")  # a face, not a ball
 
 
 @dataclass
@@ -55,15 +56,17 @@ class RigidImpactor:
         self.v = np.array(self.velocity, float)
         self.a = np.zeros_like(self.x)
         self.x_at_forces = self.x.copy()
-        # the compiled contact's axis: a cylinder's, zeros for a ball (a sphere, a disc)
-        self.ball_axis = np.zeros_like(self.x)
+        # the compiled contacts' axis (kernels.particle_gap): a cylinder's or a flat face's, zeros
+        # for a ball (a sphere, a disc)
+        self.contact_axis = np.zeros_like(self.x)
         if self.shape == "cylinder" and self.axis is not None:
             self.axis = np.asarray(self.axis, float) / np.linalg.norm(self.axis)
-            self.ball_axis = self.axis.copy()
-        if self.shape in ("flat_punch", "rod"):
+            self.contact_axis = self.axis.copy()
+        if self.shape in FLAT:
             ax = np.asarray(self.axis if self.axis is not None else -self.v, float)
             self.axis = ax / np.linalg.norm(ax)
             self.depth = self.depth or self.radius
+            self.contact_axis = self.axis.copy()
         self._k = None  # the footprint on the contact nodes, in the order forces() receives them
 
     @property
@@ -116,7 +119,7 @@ class RigidImpactor:
         stored penalty energy (J)."""
         if self.ball:  # compiled
             f = np.empty((len(x), x.shape[1]))
-            pen2 = ball_contact(np.ascontiguousarray(x, float), np.ascontiguousarray(v, float), self.x, self.ball_axis,
+            pen2 = ball_contact(np.ascontiguousarray(x, float), np.ascontiguousarray(v, float), self.x, self.contact_axis,
                                 self.v,
                                 float(self.radius), float(self.penalty), float(self.friction),
                                 float(self.slip_velocity**2), f)

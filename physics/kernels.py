@@ -278,12 +278,49 @@ def ball_on_nodes(X, u, v, du, S, xs, vs, centre, axis, velocity, radius, penalt
 
 
 @kernel
-def ball_on_particles(X, Fout, rows, x, f, x_prev, f_prev, started, dt, centre, axis, velocity, radius,
-                      penalty, friction, slip2, F):
-    """One step of a rigid ball (or a cylinder along ``axis`` (3,), zeros for a ball: ball_contact)
-    on particles, in place on an engine's arrays: ball_contact on the candidates' positions X[rows] (X (N, 3) m, rows (k,)), velocities from the last step
-    ((x - x_prev) / dt once ``started``), their forces added to Fout[rows] (N) where non-zero.
-    Out: x, f (k, 3) this step's positions and forces; F (3,) N the force on the ball (minus
+def particle_gap(d0, d1, d2, axis, radius, flat, depth, rounding):
+    """(penetration m, normal (3 floats) at the particle) of a particle centre at d = x - X from
+    a rigid impactor (RigidImpactor.gap, one point). A ball of ``radius`` (a cylinder along
+    ``axis``; zeros: a ball); ``flat``: a face of half-width ``radius`` whose normal into the
+    target is -axis, counting centres up to ``depth`` behind it, grown by a ball of
+    ``rounding`` (the particle radius: flat under the face, a torus round its edge)."""
+    s = (d0 * axis[0] + d1 * axis[1]) + d2 * axis[2]  # along the axis (a ball: 0)
+    l0, l1, l2 = d0 - s * axis[0], d1 - s * axis[1], d2 - s * axis[2]  # across it
+    if not flat:
+        dist = np.sqrt(0.0 + l0 * l0 + l1 * l1 + l2 * l2)
+        rr = max(dist, 1e-300)
+        return max(radius - dist, 0.0), l0 / rr, l1 / rr, l2 / rr
+    lateral = np.sqrt(l0 * l0 + l1 * l1 + l2 * l2)
+    if rounding <= 0:
+        inside = s > 0 and s < depth and lateral <= radius
+        return (s if inside else 0.0), -axis[0], -axis[1], -axis[2]
+    out = lateral - radius  # > 0 beyond the edge
+    if out <= 0:  # under the face
+        pen = s + rounding
+        return (pen if pen > 0 and s < depth else 0.0), -axis[0], -axis[1], -axis[2]
+    lr = max(lateral, 1e-300)
+    e0, e1, e2 = l0 / lr, l1 / lr, l2 / lr
+    if s <= 0:  # round the edge
+        dist = np.hypot(out, s)
+        m = max(dist, 1e-300)
+        n0, n1, n2 = (out * e0 + s * axis[0]) / m, (out * e1 + s * axis[1]) / m, (out * e2 + s * axis[2]) / m
+    else:  # beside the side
+        dist = out
+        m = max(dist, 1e-300)
+        n0, n1, n2 = e0 * dist / m, e1 * dist / m, e2 * dist / m
+    pen = rounding - dist
+    return (pen if pen > 0 and s < depth else 0.0), n0, n1, n2
+
+
+@kernel
+def impactor_on_particles(X, Fout, rows, x, f, x_prev, f_prev, started, dt, centre, axis, velocity, radius,
+                          flat, depth, rounding, penalty, friction, slip2, F):
+    """One step of a rigid impactor (particle_gap: a ball, a cylinder along ``axis``, a flat face)
+    on particles, in place on an engine's arrays: penalty contact with regularised Coulomb
+    friction (RigidImpactor.forces) on the candidates' positions X[rows] (X (N, 3) m, rows (k,)),
+    velocities from the last step ((x - x_prev) / dt once ``started``), their forces added to
+    Fout[rows] (N) where non-zero.
+    Out: x, f (k, 3) this step's positions and forces; F (3,) N the force on the impactor (minus
     the sum of f, row by row as numpy's sum over axis 0); f_prev is used as scratch. Returns
     (sum of squared penetrations m^2, sum of (f_prev + f) . (x - x_prev) J in numpy's pairwise
     order)."""
@@ -294,14 +331,9 @@ def ball_on_particles(X, Fout, rows, x, f, x_prev, f_prev, started, dt, centre, 
         p = rows[r]
         x0, x1, x2 = X[p, 0], X[p, 1], X[p, 2]
         x[r, 0], x[r, 1], x[r, 2] = x0, x1, x2
-        d0, d1, d2 = x0 - centre[0], x1 - centre[1], x2 - centre[2]
-        s = (d0 * axis[0] + d1 * axis[1]) + d2 * axis[2]  # (a cylinder's axial part; a ball: 0)
-        d0, d1, d2 = d0 - s * axis[0], d1 - s * axis[1], d2 - s * axis[2]
-        dist = np.sqrt(0.0 + d0 * d0 + d1 * d1 + d2 * d2)
-        rr = max(dist, 1e-300)
-        pen = max(radius - dist, 0.0)
+        pen, d0, d1, d2 = particle_gap(x0 - centre[0], x1 - centre[1], x2 - centre[2], axis, radius, flat, depth,
+                                       rounding)
         fn = penalty * pen
-        d0, d1, d2 = d0 / rr, d1 / rr, d2 / rr
         g0, g1, g2 = fn * d0, fn * d1, fn * d2
         if friction > 0:
             if moving:
@@ -354,13 +386,14 @@ def ball_leapfrog(X, V, F, X_prev, F_prev, mass, free, dt, started):
 
 
 @kernel
-def ball_step(X, Fout, rows, x, f, x_prev, f_prev, started, dt, centre, axis, velocity, radius, penalty, friction,
-              slip2, F, X_prev, F_prev, mass, free):
-    """One engine step of a rigid ball on particles: ball_on_particles, then ball_leapfrog of
-    the ball (centre, velocity: its X, V) under the force F it found. Returns (sum of squared
-    penetrations m^2, the particles' contact work J, the ball's own J), as the two return."""
-    pen2, dwork = ball_on_particles(X, Fout, rows, x, f, x_prev, f_prev, started, dt, centre, axis, velocity, radius,
-                                    penalty, friction, slip2, F)
+def impactor_step(X, Fout, rows, x, f, x_prev, f_prev, started, dt, centre, axis, velocity, radius, flat, depth,
+                  rounding, penalty, friction, slip2, F, X_prev, F_prev, mass, free):
+    """One engine step of a rigid impactor on particles: impactor_on_particles, then
+    ball_leapfrog of the impactor (centre, velocity: its X, V) under the force F it found.
+    Returns (sum of squared penetrations m^2, the particles' contact work J, the impactor's own
+    J), as the two return."""
+    pen2, dwork = impactor_on_particles(X, Fout, rows, x, f, x_prev, f_prev, started, dt, centre, axis, velocity,
+                                        radius, flat, depth, rounding, penalty, friction, slip2, F)
     work = ball_leapfrog(centre, velocity, F, X_prev, F_prev, mass, free, dt if dt > 0 else 0.0, started)
     return pen2, dwork, work
 

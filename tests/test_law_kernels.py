@@ -267,25 +267,27 @@ def test_compiled_ball_contact_is_the_gap_form(seed, dim, friction, shape):
     assert stored == pytest.approx(0.5 * imp.penalty * float(pen @ pen), rel=1e-11)
 
 
-@settings(max_examples=10, deadline=None, derandomize=True)
-@given(seed=st.integers(0, 2**31), shape=st.sampled_from(["sphere", "cylinder"]),
-       friction=st.sampled_from([0.0, 0.2]))
-def test_particle_impactor_compiled_pass_is_its_readable_path(seed, shape, friction):
-    """A sphere or a cylinder (along an oblique axis) striking particles that move under it: the
-    compiled pass on the engine's arrays gives the forces, the impactor's motion and its contact
-    ledger of the path through copies, to round-off, step after step."""
+@settings(max_examples=16, deadline=None, derandomize=True)
+@given(seed=st.integers(0, 2**31), shape=st.sampled_from(["sphere", "cylinder", "rod", "flat_punch"]),
+       friction=st.sampled_from([0.0, 0.2]), rounding=st.sampled_from([0.0, 0.15]))
+def test_particle_impactor_compiled_pass_is_its_readable_path(seed, shape, friction, rounding):
+    """A sphere, a cylinder (along an oblique axis) or a flat face (a rod's or a punch's, sharp
+    or grown by a particle's radius) striking particles that move under it: the compiled pass on
+    the engine's arrays gives the forces, the impactor's motion and its contact ledger of the
+    path through copies (RigidImpactor.forces, its gap in numpy), to round-off, step after step."""
     from dem_region.particle_impactor import ParticleImpactor
-    from physics.impactor import RigidImpactor
+    from physics.impactor import FLAT, RigidImpactor
     rng = np.random.default_rng(seed)
     n, dt = 400, 1e-6
     X0 = rng.uniform(-1.0, 1.0, size=(n, 3))
     V = rng.normal(size=(n, 3)) * 20.0
-    axis = _unit(rng, 3) if shape == "cylinder" else None
+    axis = _unit(rng, 3) if shape != "sphere" else None
     centre, velocity = rng.normal(size=3) * 0.1, rng.normal(size=3) * 50.0
+    flat = {"depth": 0.5, "rounding": rounding} if shape in FLAT else {}
     runs = []
     for target in (_Arrays, _Engine):  # the compiled pass, the copies
-        imp = ParticleImpactor(RigidImpactor(shape, centre, 0.6, 0.5, velocity, 1e5, friction=friction, axis=axis),
-                               np.arange(0, n, 2), fixed=(False, True, False))
+        imp = ParticleImpactor(RigidImpactor(shape, centre, 0.6, 0.5, velocity, 1e5, friction=friction, axis=axis,
+                                             **flat), np.arange(0, n, 2), fixed=(False, True, False))
         steps = []
         for k in range(30):
             eng = target(X0 + k * dt * V)
