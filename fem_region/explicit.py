@@ -17,8 +17,8 @@ import scipy.sparse as sp
 from .bulk_viscosity import BulkViscosity
 from .kernels import add_first_columns, axpy, residual_finish, residual_start, respa_kicks, respa_kicks_drift, \
     scale_rows, kinetic_energy as nodal_kinetic_energy
-from physics.impactor import RigidImpactor
-from physics.kernels import add_at, ball_on_nodes
+from physics.impactor import FLAT, RigidImpactor
+from physics.kernels import add_at, impactor_on_nodes
 from .region import FemRegion
 from .stable_step import assembled_critical_dt, largest_frequency_squared
 
@@ -150,6 +150,7 @@ class ExplicitDynamics:
                                  for _ in self.impactors]
         self._xs, self._vs = np.zeros((len(self._surface), r.dim)), np.zeros((len(self._surface), r.dim))
         self._no_node_forces = np.zeros((0, 3))
+        self._no_footprint = np.zeros(0)  # (an impactor's penalty on every contact node)
 
     def add_nodal_mass(self, extra: np.ndarray) -> None:
         """Add (n_nodes,) kg at the nodes (interface particle masses shared by a tie)."""
@@ -302,13 +303,16 @@ class ExplicitDynamics:
         self._contact_energy = 0.0
         for k, imp in enumerate(self.impactors):
             fc_prev, F_prev = self._contact_prev[k]
-            if imp.ball:  # one compiled pass, into the buffer the last step's forces are not in
+            flat = imp.shape in FLAT
+            if imp.on_nodes_compiled:  # one compiled pass, into the buffer the last step's forces are not in
                 a, b = self._contact_buffers[k]
                 fc, F = b if fc_prev is a[0] else a
-                pen2, work = ball_on_nodes(r.X, s.u, s.v, du, S, self._xs, self._vs, imp.x, imp.contact_axis, imp.v,
-                                           float(imp.radius), float(imp.penalty), float(imp.friction),
-                                           float(imp.slip_velocity**2), fc, fc_prev, f, F)
-                energy = 0.5 * imp.penalty * pen2
+                footprint = self._no_footprint if imp._k is None else imp._k
+                pen2, work = impactor_on_nodes(r.X, s.u, s.v, du, S, self._xs, self._vs, imp.x, imp.contact_axis,
+                                               imp.v, float(imp.radius), flat, float(imp.depth) if flat else 0.0,
+                                               footprint, float(imp.penalty), float(imp.friction),
+                                               float(imp.slip_velocity**2), fc, fc_prev, f, F)
+                energy = 0.5 * (imp.penalty * pen2 if imp._k is None else pen2)
             else:
                 fc, energy = imp.forces(r.X[S] + s.u[S], s.v[S])
                 F = -fc.sum(axis=0)

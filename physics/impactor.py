@@ -75,6 +75,12 @@ class RigidImpactor:
         the compiled contact (kernels.ball_contact)."""
         return self.shape in ("sphere", "cylinder")
 
+    @property
+    def on_nodes_compiled(self) -> bool:
+        """FEM nodes take the compiled contact (kernels.impactor_on_nodes): a ball, a cylinder, or a
+        flat face not grown by a rounding (a particle's: that one is ParticleImpactor's)."""
+        return self.ball or (self.shape in FLAT and self.rounding == 0)
+
     def restrict(self, nodes: np.ndarray) -> None:
         """The contact nodes' indices (m,) in the order ``forces`` receives them (the footprint's
         share of each)."""

@@ -250,21 +250,64 @@ def ball_contact(x, v, centre, axis, velocity, radius, penalty, friction, slip2,
 
 
 @kernel
-def ball_on_nodes(X, u, v, du, S, xs, vs, centre, axis, velocity, radius, penalty, friction, slip2, fc, fc_prev, f,
-                  F):
-    """A rigid ball (or a cylinder along ``axis``: ball_contact) on FEM surface nodes S (m,) in
-    one pass: ball_contact on the positions
+def flat_contact(x, v, centre, axis, velocity, radius, depth, k, penalty, friction, slip2, f):
+    """Penalty contact of a rigid flat face (a punch's or a rod's, its normal into the target
+    -axis) with points x (m, dim) m moving at v (m, dim) m/s: a point up to ``depth`` behind the
+    face and within its half-width ``radius`` (or, with a footprint k (m,) N/m, where k > 0) is
+    pushed out along -axis by penalty (or its k) x its depth, with Coulomb friction as
+    ball_contact (RigidImpactor.forces for the sharp face, each point once). f (m, dim) N out;
+    returns sum pen^2 m^2 (one penalty) or sum k pen^2 N m (a footprint)."""
+    m, dim = x.shape
+    pen2 = 0.0
+    d, vt, still = np.empty(dim), np.empty(dim), np.zeros(dim)
+    footprint = k.shape[0] > 0
+    for i in range(dim):
+        d[i] = -axis[i]  # the normal, at every point
+    for p in range(m):
+        s = 0.0
+        for i in range(dim):
+            s += (x[p, i] - centre[i]) * axis[i]
+        lat2 = 0.0
+        for i in range(dim):
+            w = (x[p, i] - centre[i]) - s * axis[i]
+            lat2 += w * w
+        inside = s > 0 and s < depth and (k[p] > 0 if footprint else np.sqrt(lat2) <= radius)
+        pen = s if inside else 0.0
+        kp = k[p] if footprint else penalty
+        fn = kp * pen
+        for i in range(dim):
+            f[p, i] = fn * d[i]
+        if friction > 0:
+            vn = _einsum_dot(v[p], velocity, d)
+            for i in range(dim):
+                vt[i] = (v[p, i] - velocity[i]) - vn * d[i]
+            c = friction * fn / np.sqrt(_einsum_dot(vt, still, vt) + slip2)
+            for i in range(dim):
+                f[p, i] -= c * vt[i]
+        pen2 += fn * pen if footprint else pen * pen
+    return pen2
+
+
+@kernel
+def impactor_on_nodes(X, u, v, du, S, xs, vs, centre, axis, velocity, radius, flat, depth, k, penalty, friction, slip2,
+                      fc, fc_prev, f, F):
+    """A rigid impactor on FEM surface nodes S (m,) in one pass: ball_contact (a ball, or a
+    cylinder along ``axis``) or, ``flat``, flat_contact (depth m, footprint k) on the positions
     X + u (n, dim) m and velocities v (n, dim) m/s of the nodes S (gathered into the scratch
     xs, vs (m, dim)); its forces into fc (m, dim) N and added to f[S] (f (n, dim) N); F (dim,)
-    N out, the force on the ball (minus the sum of fc). Returns (sum of squared penetrations
-    m^2, sum over the nodes of (fc_prev + fc) . du[S] J, du (n, dim) m the nodes' motion)."""
+    N out, the force on the impactor (minus the sum of fc). Returns (the contact's sum of
+    squared penetrations, as the contact returns it, sum over the nodes of (fc_prev + fc) . du[S]
+    J, du (n, dim) m the nodes' motion)."""
     m, dim = xs.shape
     for r in range(m):
         p = S[r]
         for i in range(dim):
             xs[r, i] = X[p, i] + u[p, i]
             vs[r, i] = v[p, i]
-    pen2 = ball_contact(xs, vs, centre, axis, velocity, radius, penalty, friction, slip2, fc)
+    if flat:
+        pen2 = flat_contact(xs, vs, centre, axis, velocity, radius, depth, k, penalty, friction, slip2, fc)
+    else:
+        pen2 = ball_contact(xs, vs, centre, axis, velocity, radius, penalty, friction, slip2, fc)
     work = 0.0
     for i in range(dim):
         F[i] = 0.0

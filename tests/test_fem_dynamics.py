@@ -60,19 +60,19 @@ def test_impactor_conserves_momentum(dim, shape, friction):
     assert e["dissipated"] > -0.01 * e0, "contact must not create energy"
 
 
-class _GapBall(RigidImpactor):
-    ball = False  # the readable gap form on gathered nodes, not the compiled pass
+class _GapForm(RigidImpactor):
+    ball = on_nodes_compiled = False  # the readable gap form on gathered nodes, not the compiled pass
 
 
 @pytest.mark.parametrize("dim, shape, friction, axis", [(2, "cylinder", 0.3, None), (3, "sphere", 0.2, None),
                                                        (3, "cylinder", 0.25, (0.3, 1.0, 0.1))])
 def test_compiled_ball_on_the_surface_is_the_gathered_gap_form(dim, shape, friction, axis):
     """The ball's (or a cylinder's, along an oblique axis) one-pass contact on the FEM's surface
-    nodes (kernels.ball_on_nodes) steps the block as the gap form on the gathered nodes does:
+    nodes (kernels.impactor_on_nodes) steps the block as the gap form on the gathered nodes does:
     nodes, impactor and contact ledger equal to round-off over an oblique impact with friction
     (the force on the ball and the work are summed in another order)."""
     runs = []
-    for kind in (RigidImpactor, _GapBall):
+    for kind in (RigidImpactor, _GapForm):
         c = np.array([0.05, 0.06] if dim == 2 else [0.05, 0.05, 0.06])
         v = np.zeros(dim)
         v[0], v[dim - 1] = 3.0, -20.0
@@ -87,6 +87,43 @@ def test_compiled_ball_on_the_surface_is_the_gathered_gap_form(dim, shape, frict
     assert np.abs(ia.v - ib.v).max() <= 1e-9 * np.abs(ib.v).max()
     for k in ("kinetic", "internal", "dissipated"):
         assert a.energies()[k] == pytest.approx(b.energies()[k], rel=1e-8, abs=1e-12)
+
+
+@pytest.mark.parametrize("dim, shape, footprint", [(2, "flat_punch", False), (3, "rod", False), (3, "rod", True)])
+def test_compiled_flat_face_on_the_surface_is_the_gathered_gap_form(dim, shape, footprint):
+    """A flat face pressed obliquely into the block with friction, its penalty on every node
+    under it or a footprint of its own per node: the compiled pass (kernels.flat_contact) steps
+    it as the gap form on the gathered nodes does, nodes, impactor, stored penalty energy (at
+    every step) and ledger to round-off."""
+    r = _block(dim)
+    top = 0.05
+    pair = []
+    for kind in (RigidImpactor, _GapForm):
+        c = np.array([0.05, top + 2e-4] if dim == 2 else [0.05, 0.05, top + 2e-4])
+        v = np.zeros(dim)
+        v[0], v[dim - 1] = 2.0, -20.0
+        axis = np.zeros(dim)
+        axis[dim - 1] = 1.0
+        k = None
+        if footprint:  # a share of the face's penalty per node within it, by its distance from the axis
+            lateral = np.linalg.norm((r.X - c)[:, : dim - 1], axis=1)
+            k = np.where(lateral <= 0.02, 5e7 * (1.5 - lateral / 0.02), 0.0)
+        imp = kind(shape, c, 0.02, 0.05, v, penalty=5e7, friction=0.25, axis=axis, depth=0.005, footprint=k)
+        dyn = ExplicitDynamics(r, impactors=[imp])
+        dyn.start()
+        pair.append((dyn, imp))
+    (a, ia), (b, ib) = pair
+    dt, stored = 0.5 * a.critical_dt(), []
+    for _ in range(300):
+        a.step(dt)
+        b.step(dt)
+        assert a._contact_energy == pytest.approx(b._contact_energy, rel=1e-9, abs=1e-15)
+        stored.append(a._contact_energy)
+    assert max(stored) > 0 and np.abs(ia.v - v).max() > 0.5  # it pressed in, and it hit
+    assert np.abs(a.state.u - b.state.u).max() <= 1e-9 * np.abs(b.state.u).max()
+    assert np.abs(ia.v - ib.v).max() <= 1e-9 * np.abs(ib.v).max()
+    for key in ("kinetic", "internal", "dissipated"):
+        assert a.energies()[key] == pytest.approx(b.energies()[key], rel=1e-8, abs=1e-12)
 
 
 def test_fixed_and_moving_supports_set_their_velocities_in_order():
