@@ -85,6 +85,13 @@ def test_no_stage_allocates_with_the_3d_model():
                           for size in (SMALL_3D, LARGE_3D)))
 
 
+def test_no_stage_allocates_with_the_model_under_a_flat_face():
+    """The all-FEM rod_impact: its rod, a flat face with a footprint per node (it took 54 kB a
+    step before session 49 compiled it), on the coarse plate at two radial resolutions."""
+    _same_at_both_sizes(*(_stage_peaks("fem", "liggghts", {"mesh.elements_along": n}, "rod_impact_coarse")
+                          for n in (8, 16)))
+
+
 # the paths a case file may choose beyond the defaults: the penalty tie; several DEM steps per
 # FEM step (the interface band's elements among the fast forces, linear and Total Lagrangian);
 # one-point elements with the stiffness or the viscous hourglass control (the band's elements are
