@@ -212,6 +212,19 @@ def _einsum_dot(a, a0, b):
 
 
 @kernel
+def _friction(f, p, v, velocity, n, vt, still, fn, friction, slip2):
+    """f[p] -= mu fn v_t / sqrt(|v_t|^2 + slip2): Coulomb friction of point p against its slip
+    v_t, its velocity v[p] less the impactor's, without the part along the normal n (dim,);
+    vt, still (dim,) scratch and zeros (the contacts' common tail, in the numpy form's order)."""
+    vn = _einsum_dot(v[p], velocity, n)
+    for i in range(n.shape[0]):
+        vt[i] = (v[p, i] - velocity[i]) - vn * n[i]
+    c = friction * fn / np.sqrt(_einsum_dot(vt, still, vt) + slip2)
+    for i in range(n.shape[0]):
+        f[p, i] -= c * vt[i]
+
+
+@kernel
 def ball_contact(x, v, centre, axis, velocity, radius, penalty, friction, slip2, f):
     """Penalty contact of a rigid ball (a disc in 2D) with points x (m, dim) m moving at v
     (m, dim) m/s: normal force penalty x penetration along the outward normal, Coulomb friction
@@ -239,12 +252,7 @@ def ball_contact(x, v, centre, axis, velocity, radius, penalty, friction, slip2,
             d[i] = d[i] / rr  # the normal
             f[p, i] = fn * d[i]
         if friction > 0:
-            vn = _einsum_dot(v[p], velocity, d)
-            for i in range(dim):
-                vt[i] = (v[p, i] - velocity[i]) - vn * d[i]
-            c = friction * fn / np.sqrt(_einsum_dot(vt, still, vt) + slip2)
-            for i in range(dim):
-                f[p, i] -= c * vt[i]
+            _friction(f, p, v, velocity, d, vt, still, fn, friction, slip2)
         pen2 += pen * pen
     return pen2
 
@@ -278,12 +286,7 @@ def flat_contact(x, v, centre, axis, velocity, radius, depth, k, penalty, fricti
         for i in range(dim):
             f[p, i] = fn * d[i]
         if friction > 0:
-            vn = _einsum_dot(v[p], velocity, d)
-            for i in range(dim):
-                vt[i] = (v[p, i] - velocity[i]) - vn * d[i]
-            c = friction * fn / np.sqrt(_einsum_dot(vt, still, vt) + slip2)
-            for i in range(dim):
-                f[p, i] -= c * vt[i]
+            _friction(f, p, v, velocity, d, vt, still, fn, friction, slip2)
         pen2 += fn * pen if footprint else pen * pen
     return pen2
 
