@@ -58,9 +58,10 @@ class ParticleImpactor:
         return g
 
     def apply(self, backend, dt: float) -> None:
-        """One engine step: contact forces on the candidates, then the impactor's leapfrog. A
-        ball on a target with particle arrays (the coupling layer's ModelStep: ``x``, ``f``,
-        ``rows_of``) in one compiled pass on those arrays; otherwise through copies. At the
+        """One engine step: contact forces on the candidates, then the impactor's leapfrog. On a
+        target with particle arrays (the coupling layer's ModelStep: ``x``, ``f``, ``rows_of``)
+        one compiled call on those arrays (kernels.impactor_step: every shape); otherwise through
+        copies. At the
         start (dt = 0) of a model that carries a state (a grown zone's: study/growth.py) the last
         forces again, on the same particles at the same positions: the engine's start completes
         the step the old model ended on (evaluated anew, the impactor already moved on touched
@@ -71,7 +72,7 @@ class ParticleImpactor:
                 backend.add_forces(self.ids[touching], self._f_prev[touching])
             self.force = self._F_prev
             return
-        if (self.imp.ball or self.imp.shape in FLAT) and self.imp._k is None and hasattr(backend, "rows_of"):
+        if hasattr(backend, "rows_of"):  # (every shape has a compiled contact: kernels.particle_gap)
             if self._bound is not backend:  # bind once: the candidates as rows of the target's arrays
                 self._rows = np.ascontiguousarray(backend.rows_of(self.ids), np.int64)
                 self._bound = backend
@@ -82,8 +83,8 @@ class ParticleImpactor:
             else:
                 started = True
             imp = self.imp
-            # the contact, then the ball's work over its last move, X_prev, F_prev <- this step's and
-            # its leapfrog, in place
+            # the contact, then the impactor's work over its last move, X_prev, F_prev <- this step's
+            # and its leapfrog, in place
             flat = imp.shape in FLAT
             pen2, dwork, work = impactor_step(
                 backend.x, backend.f, self._rows, self._x_now, self._f_now, self._x_prev, self._f_prev, started, dt,

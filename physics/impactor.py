@@ -125,10 +125,9 @@ class RigidImpactor:
         stored penalty energy (J)."""
         if self.ball:  # compiled
             f = np.empty((len(x), x.shape[1]))
-            pen2 = ball_contact(np.ascontiguousarray(x, float), np.ascontiguousarray(v, float), self.x, self.contact_axis,
-                                self.v,
-                                float(self.radius), float(self.penalty), float(self.friction),
-                                float(self.slip_velocity**2), f)
+            pen2 = ball_contact(np.ascontiguousarray(x, float), np.ascontiguousarray(v, float), self.x,
+                                self.contact_axis, self.v, float(self.radius), float(self.penalty),
+                                float(self.friction), float(self.slip_velocity**2), f)
             return f, 0.5 * self.penalty * pen2
         pen, n = self.gap(x)
         k = self.penalty if self._k is None else self._k
