@@ -300,8 +300,8 @@ def residual_start(u, u_at, f_int, du, f):
 
 @kernel
 def residual_finish(f, node_f, m, a, u, u_at, dofs, m_pres, a_pres, reaction_prev, reaction, du):
-    """The end of a force evaluation in one pass: f += node_f[:, :dim] (the node-force models'
-    sum, (n, 3) N; none: (0, 3)), a = f / m, the prescribed DOFs' reactions and accelerations
+    """The end of a force evaluation in one pass: f += node_f[:, :dim] (the last node-force
+    model's forces, (n, 3) N; none: (0, 3)), a = f / m, the prescribed DOFs' reactions and accelerations
     (support_reaction), u_at <- u (the ledger's time level). Returns the supports' work (J)."""
     n, dim = f.shape
     if node_f.shape[0]:
