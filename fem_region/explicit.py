@@ -224,7 +224,7 @@ class ExplicitDynamics:
         dt_fast s after them: one compiled pass where nothing moves on its own (no impactor, no
         moving support), else the kicks and ``drift`` in turn."""
         s = self.state
-        if self.impactors or self._moving or self._rest_dofs is None:
+        if self.impactors or self._moving:  # (_rest_dofs is None only beside a moving support)
             respa_kicks(s.v, s.a, f_tie, band, self.m, dt, dt_fast, slow, True, f_fast, a_slow)
             self.drift(dt_fast)
             return
